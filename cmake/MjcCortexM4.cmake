@@ -1,0 +1,73 @@
+# Cortex-M4F images: CPU flags, firmware code generation rules, and mjc_add_cm4_image().
+
+# The STM32G474 and QEMU's mps2-an386 are both Cortex-M4 with the single-precision FPU.
+add_library(mjc_cortex_m4 INTERFACE)
+set(MJC_CM4_CPU_FLAGS -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard)
+target_compile_options(mjc_cortex_m4 INTERFACE
+  ${MJC_CM4_CPU_FLAGS}
+  -ffunction-sections -fdata-sections -fno-common
+  $<$<COMPILE_LANGUAGE:CXX>:-fno-exceptions -fno-rtti -fno-threadsafe-statics>
+  -fstack-usage
+  # GCC notes that passing small structs changed ABI in GCC 7.1; every object here is
+  # built by one compiler, so the note is noise.
+  -Wno-psabi)
+target_link_options(mjc_cortex_m4 INTERFACE
+  ${MJC_CM4_CPU_FLAGS} -Wl,--gc-sections -nostartfiles)
+target_link_libraries(mjc_defaults INTERFACE mjc_cortex_m4)
+
+find_program(MJC_QEMU_ARM qemu-system-arm REQUIRED)
+
+# QEMU running an image to completion: output over semihosting on stdout, exit status
+# from SYS_EXIT_EXTENDED. ctest prepends this to the image path.
+set(MJC_QEMU_MPS2_COMMAND
+  ${MJC_QEMU_ARM} -M mps2-an386 -display none -monitor none -serial none
+  -semihosting-config enable=on,target=native,chardev=sh0 -chardev stdio,id=sh0
+  -kernel)
+
+# Symbols a firmware image must never contain: any heap allocator, and (with
+# NO_DOUBLE) the soft-float double routines that would mean a double on the hot path.
+set(MJC_HEAP_SYMBOLS malloc _malloc_r calloc _calloc_r realloc _realloc_r _sbrk _sbrk_r
+    _Znwj _Znaj _ZnwjRKSt9nothrow_t _ZnajRKSt9nothrow_t _ZnwjSt11align_val_t)
+
+# mjc_add_cm4_image(<name> SOURCES <src>... [LIBS <lib>...] [STDIO] [NO_HEAP] [NO_DOUBLE])
+#
+# Builds <name>.elf for mps2-an386 with a link map (<name>.map) and a size report
+# (<name>.size.txt, also printed). STDIO links newlib's semihosting syscalls (rdimon)
+# so printf works: test images only. NO_HEAP proves at link time that nothing can
+# allocate: every allocator entry is --wrap'ed to a symbol that does not exist, so a
+# reference anywhere fails the link, and the final image is checked with nm.
+function(mjc_add_cm4_image name)
+  cmake_parse_arguments(ARG "STDIO;NO_HEAP;NO_DOUBLE" "" "SOURCES;LIBS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES} $<TARGET_OBJECTS:mjc_board_qemu_mps2>)
+  set_target_properties(${name} PROPERTIES SUFFIX ".elf"
+    CROSSCOMPILING_EMULATOR "${MJC_QEMU_MPS2_COMMAND}")
+  target_include_directories(${name} PRIVATE
+    $<TARGET_PROPERTY:mjc_board_qemu_mps2,INTERFACE_INCLUDE_DIRECTORIES>)
+  target_link_libraries(${name} PRIVATE mjc_defaults ${ARG_LIBS})
+  target_link_options(${name} PRIVATE
+    -T${PROJECT_SOURCE_DIR}/linker/mps2_an386.ld
+    -Wl,-Map=$<TARGET_FILE_DIR:${name}>/${name}.map -Wl,--print-memory-usage)
+  set_property(TARGET ${name} APPEND PROPERTY LINK_DEPENDS
+    ${PROJECT_SOURCE_DIR}/linker/mps2_an386.ld)
+  if(ARG_STDIO)
+    target_link_options(${name} PRIVATE --specs=rdimon.specs)
+  else()
+    target_link_options(${name} PRIVATE --specs=nano.specs)
+  endif()
+  set(forbidden "")
+  if(ARG_NO_HEAP)
+    list(APPEND forbidden ${MJC_HEAP_SYMBOLS})
+    foreach(sym IN LISTS MJC_HEAP_SYMBOLS)
+      target_link_options(${name} PRIVATE -Wl,--wrap=${sym})
+    endforeach()
+  endif()
+  if(ARG_NO_DOUBLE)
+    list(APPEND forbidden __aeabi_dadd __aeabi_dsub __aeabi_dmul __aeabi_ddiv __aeabi_f2d
+         __aeabi_i2d __aeabi_d2iz __aeabi_l2d __aeabi_d2lz)
+  endif()
+  add_custom_command(TARGET ${name} POST_BUILD
+    COMMAND ${CMAKE_COMMAND} -DELF=$<TARGET_FILE:${name}> -DNM=${CMAKE_NM}
+            -DSIZE=${CMAKE_SIZE} "-DFORBIDDEN=${forbidden}"
+            -P ${PROJECT_SOURCE_DIR}/cmake/check_image.cmake
+    VERBATIM)
+endfunction()

@@ -1,0 +1,18 @@
+# Post-link check of a Cortex-M image: writes <elf>.size.txt (section sizes) and fails
+# if the image defines or references any symbol in FORBIDDEN.
+#   cmake -DELF=<image> -DNM=<nm> -DSIZE=<size> -DFORBIDDEN=<sym;...> -P check_image.cmake
+cmake_minimum_required(VERSION 3.25)
+execute_process(COMMAND ${SIZE} -A -d ${ELF} OUTPUT_FILE ${ELF}.size.txt
+                COMMAND_ERROR_IS_FATAL ANY)
+execute_process(COMMAND ${SIZE} -B -d ${ELF} OUTPUT_VARIABLE berkeley COMMAND_ERROR_IS_FATAL ANY)
+message(STATUS "size of ${ELF}:\n${berkeley}")
+if(FORBIDDEN)
+  execute_process(COMMAND ${NM} ${ELF} OUTPUT_VARIABLE symbols COMMAND_ERROR_IS_FATAL ANY)
+  string(REPLACE "\n" ";" lines "${symbols}")
+  foreach(line IN LISTS lines)
+    string(REGEX REPLACE "^.* " "" sym "${line}")
+    if(sym IN_LIST FORBIDDEN)
+      message(FATAL_ERROR "${ELF}: forbidden symbol '${sym}' (heap or double on target)")
+    endif()
+  endforeach()
+endif()

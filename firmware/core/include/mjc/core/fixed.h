@@ -1,0 +1,291 @@
+// Fixed-point quantities: a signed integer that carries its unit and its Q format.
+//
+// Fixed<U, F, Rep> holds value = raw · 2^-F in unit U. The rules (conventions.md):
+//  - add / subtract only the same unit in the same format; the result saturates;
+//  - a product is exact: Fixed<U1,F1,R1> * Fixed<U2,F2,R2> is a Fixed<U1·U2, F1+F2> in
+//    the wide representation (int32 for 16-bit operands, int64 for 32-bit ones), and
+//    FixedCast<To>() brings it to the wanted format, rounding to nearest (ties toward
+//    +inf, i.e. floor(x + ½ LSB)) and saturating. Mul<To>() does both in one call;
+//  - Divide<To>(a, b) divides through int64, rounds to nearest (ties away from zero)
+//    and saturates; b = 0 saturates toward the sign of a (0/0 gives 0);
+//  - FromDouble() is consteval: a literal never puts a float on the target's hot path.
+//    Quantize() is the run-time form for host code (tools, simulator, tests);
+//  - every conversion that can lose range or precision is spelled out.
+//
+// All operations are constexpr and rely only on C++20's defined two's-complement
+// arithmetic and shifts, so the same inputs give bit-identical outputs on x86-64 and
+// Cortex-M4 (tests/target compares a digest of both).
+#pragma once
+
+#include <compare>
+#include <concepts>
+#include <cstdint>
+#include <limits>
+#include <type_traits>
+
+#include "mjc/core/units.h"
+
+namespace mjc {
+
+namespace fixed_detail {
+
+template <class Rep>
+inline constexpr int kBits = std::numeric_limits<Rep>::digits + 1;
+
+// The representation that holds any product of two operands exactly.
+template <class A, class B>
+using WideRep =
+    std::conditional_t<(sizeof(A) <= 2 && sizeof(B) <= 2), std::int32_t, std::int64_t>;
+
+template <class Rep>
+constexpr Rep SaturateTo(std::int64_t v) {
+  if (v > static_cast<std::int64_t>(std::numeric_limits<Rep>::max())) {
+    return std::numeric_limits<Rep>::max();
+  }
+  if (v < static_cast<std::int64_t>(std::numeric_limits<Rep>::min())) {
+    return std::numeric_limits<Rep>::min();
+  }
+  return static_cast<Rep>(v);
+}
+
+// floor(v / 2^s + 1/2) without overflow, for 0 < s < 64.
+constexpr std::int64_t RoundingShiftRight(std::int64_t v, int s) {
+  const std::int64_t quotient = v >> s;  // floor; arithmetic shift is defined in C++20
+  const std::uint64_t remainder =
+      static_cast<std::uint64_t>(v) & ((std::uint64_t{1} << s) - 1u);
+  const std::uint64_t half = std::uint64_t{1} << (s - 1);
+  // quotient <= INT64_MAX >> s, so the increment cannot overflow.
+  return remainder >= half ? quotient + 1 : quotient;
+}
+
+// v · 2^s, saturated to int64, for 0 <= s < 63.
+constexpr std::int64_t SaturatingShiftLeft(std::int64_t v, int s) {
+  if (s == 0) return v;
+  if (v > (std::numeric_limits<std::int64_t>::max() >> s)) {
+    return std::numeric_limits<std::int64_t>::max();
+  }
+  if (v < (std::numeric_limits<std::int64_t>::min() >> s)) {
+    return std::numeric_limits<std::int64_t>::min();
+  }
+  return v << s;
+}
+
+// Not constexpr: reaching it during constant evaluation is a compile error, which is
+// how a consteval literal reports a value outside its format (no exceptions on target).
+void LiteralOutOfRange();
+
+constexpr double Pow2(int e) {
+  double r = 1.0;
+  for (int i = 0; i < e; ++i) r *= 2.0;
+  for (int i = 0; i > e; --i) r *= 0.5;
+  return r;
+}
+
+}  // namespace fixed_detail
+
+template <class U, int kFrac, std::signed_integral Rep = std::int32_t>
+class Fixed {
+ public:
+  using unit = U;
+  using rep = Rep;
+  static constexpr int kFracBits = kFrac;
+  static constexpr int kBits = fixed_detail::kBits<Rep>;
+  static_assert(kFrac >= 0 && kFrac < kBits, "fraction bits must fit the representation");
+
+  // Zero.
+  constexpr Fixed() = default;
+
+  // An integer value (not a raw count), saturated to the format's range. Eigen builds
+  // its zeros and identities through Scalar(0) and Scalar(1).
+  template <std::integral I>
+  explicit constexpr Fixed(I whole)
+      : raw_(fixed_detail::SaturateTo<Rep>(fixed_detail::SaturatingShiftLeft(
+            static_cast<std::int64_t>(whole), kFrac))) {}
+
+  // Same unit, another format: rounds to nearest and saturates (see FixedCast).
+  template <int kOtherFrac, class OtherRep>
+  requires(
+      kOtherFrac != kFrac ||
+      !std::is_same_v<
+          OtherRep, Rep>) explicit constexpr Fixed(Fixed<U, kOtherFrac, OtherRep> other);
+
+  static constexpr Fixed FromRaw(Rep raw) {
+    Fixed f;
+    f.raw_ = raw;
+    return f;
+  }
+
+  // Compile-time literal: rounds to nearest (ties away from zero); a value outside the
+  // format's range is a compile error.
+  static consteval Fixed FromDouble(double value) {
+    const double scaled = value * fixed_detail::Pow2(kFrac);
+    if (!(scaled < kLimit && scaled >= -kLimit)) {
+      fixed_detail::LiteralOutOfRange();
+    }
+    return FromRaw(RoundScaled(scaled));
+  }
+
+  // Run-time quantisation for host code: rounds to nearest (ties away from zero),
+  // saturates out-of-range values, maps NaN to zero.
+  static constexpr Fixed Quantize(double value) {
+    const double scaled = value * fixed_detail::Pow2(kFrac);
+    if (scaled != scaled) return Fixed{};
+    if (scaled >= kLimit) return Max();
+    if (scaled < -kLimit) return Min();
+    return FromRaw(RoundScaled(scaled));
+  }
+
+  static constexpr Fixed Max() { return FromRaw(std::numeric_limits<Rep>::max()); }
+  static constexpr Fixed Min() { return FromRaw(std::numeric_limits<Rep>::min()); }
+  // One LSB.
+  static constexpr Fixed Epsilon() { return FromRaw(1); }
+
+  constexpr Rep raw() const { return raw_; }
+  constexpr double ToDouble() const {
+    return static_cast<double>(raw_) * fixed_detail::Pow2(-kFrac);
+  }
+
+  // Saturating: -Min() is Max().
+  constexpr Fixed operator-() const {
+    return FromRaw(fixed_detail::SaturateTo<Rep>(-static_cast<std::int64_t>(raw_)));
+  }
+  constexpr Fixed operator+() const { return *this; }
+
+  constexpr Fixed& operator+=(Fixed o) { return *this = *this + o; }
+  constexpr Fixed& operator-=(Fixed o) { return *this = *this - o; }
+
+  friend constexpr Fixed operator+(Fixed a, Fixed b) {
+    Rep r{};
+    if (__builtin_add_overflow(a.raw_, b.raw_, &r)) {
+      return b.raw_ > 0 ? Max() : Min();
+    }
+    return FromRaw(r);
+  }
+  friend constexpr Fixed operator-(Fixed a, Fixed b) {
+    Rep r{};
+    if (__builtin_sub_overflow(a.raw_, b.raw_, &r)) {
+      return b.raw_ < 0 ? Max() : Min();
+    }
+    return FromRaw(r);
+  }
+
+  // Scaling by an integer count, saturating.
+  template <std::integral I>
+  friend constexpr Fixed operator*(Fixed a, I n) {
+    Rep r{};
+    if (__builtin_mul_overflow(a.raw_, n, &r)) {
+      return ((a.raw_ < 0) != (n < 0)) ? Min() : Max();
+    }
+    return FromRaw(r);
+  }
+  template <std::integral I>
+  friend constexpr Fixed operator*(I n, Fixed a) {
+    return a * n;
+  }
+
+  friend constexpr auto operator<=>(Fixed, Fixed) = default;
+  friend constexpr bool operator==(Fixed, Fixed) = default;
+
+ private:
+  // 2^(bits-1) as a double: the first scaled value that no longer fits.
+  static constexpr double kLimit = fixed_detail::Pow2(kBits - 1);
+
+  static constexpr Rep RoundScaled(double scaled) {
+    // |scaled| < 2^(bits-1): the truncating cast is defined; adjust to nearest.
+    auto t = static_cast<std::int64_t>(scaled);
+    const double rest = scaled - static_cast<double>(t);
+    if (rest >= 0.5) ++t;
+    if (rest <= -0.5) --t;
+    return fixed_detail::SaturateTo<Rep>(t);
+  }
+
+  Rep raw_ = 0;
+};
+
+template <class T>
+struct IsFixed : std::false_type {};
+template <class U, int F, class R>
+struct IsFixed<Fixed<U, F, R>> : std::true_type {};
+template <class T>
+concept FixedPoint = IsFixed<T>::value;
+
+// Same unit, any format to any format: rounds to nearest (ties toward +inf) when
+// fraction bits are dropped, saturates when the value does not fit.
+template <FixedPoint To, class U, int F, class R>
+constexpr To FixedCast(Fixed<U, F, R> x) {
+  static_assert(std::is_same_v<typename To::unit, U>,
+                "FixedCast changes format, never unit");
+  constexpr int kShift = To::kFracBits - F;
+  std::int64_t v = x.raw();
+  if constexpr (kShift > 0) {
+    v = fixed_detail::SaturatingShiftLeft(v, kShift);
+  } else if constexpr (kShift < 0) {
+    v = fixed_detail::RoundingShiftRight(v, -kShift);
+  }
+  return To::FromRaw(fixed_detail::SaturateTo<typename To::rep>(v));
+}
+
+template <class U, int kFrac, std::signed_integral Rep>
+template <int kOtherFrac, class OtherRep>
+requires(kOtherFrac != kFrac || !std::is_same_v<OtherRep, Rep>) constexpr Fixed<
+    U, kFrac, Rep>::Fixed(Fixed<U, kOtherFrac, OtherRep> other)
+    : raw_(FixedCast<Fixed>(other).raw()) {}
+
+// Exact product in the wide representation. 64-bit operands are refused: Cortex-M4 has
+// no 128-bit type, so shift a wide value down (FixedCast) before multiplying it again.
+template <class U1, int F1, class R1, class U2, int F2, class R2>
+constexpr auto operator*(Fixed<U1, F1, R1> a, Fixed<U2, F2, R2> b) {
+  static_assert(sizeof(R1) <= 4 && sizeof(R2) <= 4,
+                "multiply 32-bit (or narrower) operands; FixedCast a 64-bit value first");
+  using W = fixed_detail::WideRep<R1, R2>;
+  using Result = Fixed<UnitProduct<U1, U2>, F1 + F2, W>;
+  return Result::FromRaw(
+      static_cast<W>(static_cast<W>(a.raw()) * static_cast<W>(b.raw())));
+}
+
+// a · b rounded to nearest and saturated into To, whose unit must be the product's.
+template <FixedPoint To, class A, class B>
+constexpr To Mul(A a, B b) {
+  return FixedCast<To>(a * b);
+}
+
+// a / b into To (unit U_a / U_b), through int64, rounded to nearest with ties away from
+// zero and saturated. b = 0 yields Max() for a > 0, Min() for a < 0 and zero for a = 0.
+// The format must satisfy 0 <= F_to + F_b - F_a <= 31 so the scaled dividend is exact.
+template <FixedPoint To, class U1, int F1, class R1, class U2, int F2, class R2>
+constexpr To Divide(Fixed<U1, F1, R1> a, Fixed<U2, F2, R2> b) {
+  static_assert(std::is_same_v<typename To::unit, UnitQuotient<U1, U2>>,
+                "Divide: the result's unit must be U_a / U_b");
+  static_assert(sizeof(R1) <= 4 && sizeof(R2) <= 4, "Divide takes 32-bit operands");
+  constexpr int kShift = To::kFracBits + F2 - F1;
+  static_assert(kShift >= 0 && kShift <= 31, "Divide: choose formats with 0..31 shift");
+  using ToRep = typename To::rep;
+  const std::int64_t n = static_cast<std::int64_t>(a.raw()) * (std::int64_t{1} << kShift);
+  const std::int64_t d = b.raw();
+  if (d == 0) {
+    if (n == 0) return To{};
+    return n > 0 ? To::Max() : To::Min();
+  }
+  const bool negative = (n < 0) != (d < 0);
+  const std::uint64_t un =
+      n < 0 ? 0u - static_cast<std::uint64_t>(n) : static_cast<std::uint64_t>(n);
+  const std::uint64_t ud =
+      d < 0 ? 0u - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
+  const std::uint64_t q = (un + ud / 2u) / ud;  // un < 2^62, no overflow
+  const std::int64_t sq =
+      negative ? -static_cast<std::int64_t>(q) : static_cast<std::int64_t>(q);
+  return To::FromRaw(fixed_detail::SaturateTo<ToRep>(sq));
+}
+
+// |x|, saturating (Abs(Min()) is Max()).
+template <class U, int F, class R>
+constexpr Fixed<U, F, R> Abs(Fixed<U, F, R> x) {
+  return x.raw() < 0 ? -x : x;
+}
+
+template <class U, int F, class R>
+constexpr Fixed<U, F, R> Clamp(Fixed<U, F, R> x, Fixed<U, F, R> lo, Fixed<U, F, R> hi) {
+  return x < lo ? lo : (hi < x ? hi : x);
+}
+
+}  // namespace mjc

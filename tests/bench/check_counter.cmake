@@ -1,0 +1,23 @@
+# Checks scripts/cm4-instructions on the benchmark image: the count is exact (two runs
+# agree), the baseline reads zero after subtraction, and every kernel costs something.
+cmake_minimum_required(VERSION 3.25)
+foreach(run 1 2)
+  execute_process(COMMAND ${COUNTER} ${IMAGE} OUTPUT_VARIABLE out${run} RESULT_VARIABLE rc
+                  ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "cm4-instructions failed (${rc}): ${err}")
+  endif()
+endforeach()
+message(STATUS "counts:\n${out1}")
+if(NOT out1 STREQUAL out2)
+  message(FATAL_ERROR "two runs disagree:\n${out1}\nvs\n${out2}")
+endif()
+if(NOT out1 MATCHES "baseline: 0 instructions")
+  message(FATAL_ERROR "baseline not subtracted to zero")
+endif()
+foreach(name fixed_mul spring_torque fixed_div eigen_matvec3)
+  string(REGEX MATCH "${name}: ([0-9]+) instructions" m "${out1}")
+  if(NOT m OR CMAKE_MATCH_1 EQUAL 0)
+    message(FATAL_ERROR "no count for ${name}")
+  endif()
+endforeach()
