@@ -4,9 +4,12 @@
 // measures the markers' own cost, which the script subtracts. Built NO_HEAP and
 // NO_DOUBLE: it is also the link-time proof that the core needs neither.
 #include "core_kernels.h"
+#include "mjc/core/control_tick.h"
+#include "mjc/core/position_loop.h"
 #include "semihost.h"
 
 extern "C" {
+extern std::uint32_t __stack_limit[];
 // Not inlined and not empty to the optimiser, so their addresses bracket each run.
 __attribute__((noinline)) void mjc_bench_begin() { asm volatile("" ::: "memory"); }
 __attribute__((noinline)) void mjc_bench_end() { asm volatile("" ::: "memory"); }
@@ -45,6 +48,41 @@ void MatVec3() {
   g_out = g_y(0).raw();
 }
 
+// The control tick mid-trial: a 20 Hz sine so that windows open and close within the
+// traced run (each window completion takes the longer path), with non-zero gains on
+// every term of the position loop. The sensor words for the measured ticks are made
+// before the markers by an identical shadow tick fed the same way, so the counts hold
+// ISR_Step and a load of its sample, nothing else.
+ControlTick g_tick;
+ControlTick g_shadow;
+TickResult g_result;
+Angle g_setpoint;
+constexpr int kMeasuredTicks = 101;
+Sample g_samples[kMeasuredTicks];
+
+Sample SensorWords(Angle setpoint) {
+  // An ideal motor at the setpoint, the joint a sixth of the way.
+  Sample s;
+  s.motor_count = static_cast<std::uint16_t>((setpoint.raw() / 515) & 0xFFFF);
+  const std::int32_t joint = setpoint.raw() / 6434 / 6;
+  s.joint_frame = EncodeJointFrame(static_cast<std::uint16_t>(joint & 0x3FFF), false);
+  return s;
+}
+
+void StepOnce() {
+  g_tick.ISR_Step(SensorWords(g_setpoint), &g_result);
+  g_setpoint = g_result.telemetry.setpoint;
+  g_out = g_result.telemetry.power.raw();
+}
+void ControlTick1() {
+  g_tick.ISR_Step(g_samples[0], &g_result);
+  g_out = g_result.telemetry.power.raw();
+}
+void ControlTick100() {
+  for (int i = 1; i < kMeasuredTicks; ++i) g_tick.ISR_Step(g_samples[i], &g_result);
+  g_out = g_result.telemetry.power.raw();
+}
+
 struct Entry {
   const char* name;
   void (*run)();
@@ -52,14 +90,87 @@ struct Entry {
 
 // Names are stable: ./bench prints each as "<name>_cm4: <count> instructions".
 constexpr Entry kEntries[] = {
-    {"baseline", Baseline},          {"fixed_mul", FixedMul},
-    {"spring_torque", SpringTorque}, {"fixed_div", FixedDivide},
+    {"baseline", Baseline},
+    {"fixed_mul", FixedMul},
+    {"spring_torque", SpringTorque},
+    {"fixed_div", FixedDivide},
     {"eigen_matvec3", MatVec3},
+    {"control_tick", ControlTick1},
+    {"control_tick_x100", ControlTick100},
 };
+
+// Formats v in decimal: no printf here (newlib's stdio allocates).
+void WriteNumber(const char* label, std::uint32_t v) {
+  char text[16];
+  int i = 15;
+  text[i] = 0;
+  do {
+    text[--i] = static_cast<char>('0' + v % 10u);
+    v /= 10u;
+  } while (v != 0 && i > 0);
+  qemu::SemihostWrite(label);
+  qemu::SemihostWrite(text + i);
+  qemu::SemihostWrite("\n");
+}
+
+// Stack high-water mark: paint the unused stack below the current frame, run, and
+// find the lowest word that changed.
+constexpr std::uint32_t kPaint = 0xC0FFEE11u;
+
+__attribute__((noinline)) void PaintStack() {
+  std::uintptr_t sp = 0;
+  asm volatile("mov %0, sp" : "=r"(sp));
+  const std::uintptr_t stop = sp - 256;  // leave this frame alone
+  for (auto p = reinterpret_cast<std::uintptr_t>(__stack_limit); p < stop; p += 4) {
+    *reinterpret_cast<volatile std::uint32_t*>(p) = kPaint;
+  }
+}
+
+std::uint32_t StackUsed(const std::uint32_t* top_of_main) {
+  const volatile std::uint32_t* p = __stack_limit;
+  while (*p == kPaint) ++p;
+  return static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(top_of_main) -
+                                    reinterpret_cast<std::uintptr_t>(p));
+}
+
+void SetUpTick(ControlTick& tick) {
+  ControlConfig config;
+  config.backlash.c_right = Angle::FromDouble(0.0175);
+  config.backlash.c_left = Angle::FromDouble(-0.0175);
+  config.position.kp = Fixed<PerRadian, 16>::FromDouble(8.0);
+  config.position.ki = Fixed<PerRadianSecond, 16>::FromDouble(20.0);
+  config.position.kd = Fixed<SecondPerRadian, 16>::FromDouble(0.05);
+  config.position.kff = Fixed<SecondPerRadian, 16>::FromDouble(0.1);
+  tick.Configure(config);
+  tick.Arm(true);
+  SineConfig sine;
+  sine.amplitude = Angle::FromDouble(0.4363);
+  sine.frequency = Frequency::FromDouble(20.0);
+  sine.repetitions = 50;
+  if (tick.trajectory().StartSine(sine) != TrajectoryError::kOk) qemu::SemihostExit(3);
+}
+
+void SetUp() {
+  SetUpTick(g_tick);
+  SetUpTick(g_shadow);
+  for (int i = 0; i < 600; ++i) StepOnce();  // fill the velocity window
+  // The shadow replays the same 600 ticks, then records the next ones' sensor words.
+  TickResult r;
+  Angle setpoint;
+  for (int i = 0; i < 600 + kMeasuredTicks; ++i) {
+    const Sample s = SensorWords(setpoint);
+    if (i >= 600) g_samples[i - 600] = s;
+    g_shadow.ISR_Step(s, &r);
+    setpoint = r.telemetry.setpoint;
+  }
+}
 
 }  // namespace
 
 int main() {
+  std::uint32_t top_of_main = 0;
+  SetUp();
+  PaintStack();
   for (const Entry& e : kEntries) {
     qemu::SemihostWrite("bench: ");
     qemu::SemihostWrite(e.name);
@@ -68,5 +179,10 @@ int main() {
     e.run();
     mjc_bench_end();
   }
+  // A thousand more ticks (several window completions) for the high-water mark.
+  g_setpoint = g_result.telemetry.setpoint;
+  for (int i = 0; i < 1000; ++i) StepOnce();
+  WriteNumber("stack_used_bytes: ", StackUsed(&top_of_main));
+  WriteNumber("control_tick_ram_bytes: ", sizeof(ControlTick));
   return 0;
 }

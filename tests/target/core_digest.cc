@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 
+#include "mjc/core/control_tick.h"
 #include "mjc/core/fixed_eigen.h"
 #include "mjc/core/quantities.h"
 #include "mjc/core/wrapping.h"
@@ -25,6 +26,65 @@ class Fnv1a {
  private:
   std::uint64_t hash_ = 0xCBF29CE484222325ull;
 };
+
+// The whole control tick over a sine trial and a fault: every telemetry field of every
+// tick and every window summary. The sensor words come from integer arithmetic only
+// (libm may differ between the host's and the target's C library; the core must not):
+// the motor follows the setpoint, the joint a sixth of it, plus a count of noise.
+void HashControlTicks(Fnv1a& h, vt::Rng& rng, std::uint32_t ticks) {
+  static ControlTick tick;
+  ControlConfig config;
+  config.backlash.c_right = Angle::FromDouble(0.0175);
+  config.backlash.c_left = Angle::FromDouble(-0.0175);
+  tick.Configure(config);
+  tick.Arm(true);
+  SineConfig sine;
+  sine.amplitude = Angle::FromDouble(0.4363);
+  sine.frequency = Frequency::FromDouble(2.0);
+  sine.repetitions = 5;
+  sine.rest_ms = 100;
+  Angle setpoint;
+  TickResult r;
+  for (std::uint32_t i = 0; i < ticks; ++i) {
+    if (i == 5) h.Add(static_cast<std::uint8_t>(tick.trajectory().StartSine(sine)));
+    Sample s;
+    const std::int32_t noise = static_cast<std::int32_t>(rng.Next() % 3u) - 1;
+    s.motor_count = static_cast<std::uint16_t>((setpoint.raw() / 515 + noise) & 0xFFFF);
+    const std::int32_t joint = setpoint.raw() / 6434 / 6 + noise;
+    s.joint_frame = EncodeJointFrame(static_cast<std::uint16_t>(joint & 0x3FFF), false);
+    if (i == ticks - 200) s.joint_frame ^= 0x0001u;  // a parity fault near the end
+    tick.ISR_Step(s, &r);
+    setpoint = r.telemetry.setpoint;
+    const Telemetry& t = r.telemetry;
+    h.Add(t.motor.raw());
+    h.Add(t.joint.raw());
+    h.Add(t.cable_side.raw());
+    h.Add(t.torque.raw());
+    h.Add(t.setpoint.raw());
+    h.Add(t.duty.raw());
+    h.Add(t.joint_velocity.raw());
+    h.Add(t.aligned_torque.raw());
+    h.Add(t.power.raw());
+    h.Add(t.energy_sum);
+    h.Add(static_cast<std::uint8_t>(t.segment));
+    h.Add(static_cast<std::uint16_t>(t.fault));
+    h.Add(static_cast<std::uint8_t>(r.actuation.bridge_enabled));
+    if (r.window_completed) {
+      const WindowSummary& w = r.window;
+      h.Add(w.start_tick);
+      h.Add(w.peak_tick);
+      h.Add(w.end_tick);
+      h.Add(w.loading.raw());
+      h.Add(w.unloading.raw());
+      h.Add(w.net.raw());
+      h.Add(w.positive_work.raw());
+      h.Add(w.negative_work.raw());
+      h.Add(w.eta_percent.raw());
+      h.Add(w.peak_power.raw());
+      h.Add(w.peak_torque.raw());
+    }
+  }
+}
 
 }  // namespace
 
@@ -68,6 +128,8 @@ std::uint64_t CoreDigest(std::uint32_t steps) {
     extended += WrappingDelta(counter, static_cast<std::uint16_t>(extended & 0xFFFF));
     h.Add(extended);
   }
+  // 2.5 s of 2 Hz sine trial plus rests, at 10 kHz.
+  HashControlTicks(h, rng, 28000);
   return h.value();
 }
 

@@ -277,6 +277,30 @@ constexpr To Divide(Fixed<U1, F1, R1> a, Fixed<U2, F2, R2> b) {
   return To::FromRaw(fixed_detail::SaturateTo<ToRep>(sq));
 }
 
+// floor(a · m / 2^shift + 1/2), computed exactly through a 96-bit
+// intermediate built from two 32×32→64 products (Cortex-M4 has SMULL/UMULL but no
+// 128-bit type). For scaling wide sums by a constant: energy readout (Σ P / f_tick),
+// the velocity estimator's 1/(D·dt). Legal shift: 32..62.
+constexpr std::int64_t MulShiftRound(std::int64_t a, std::int32_t m, int shift) {
+  // a = hi·2^32 + lo with hi signed and 0 <= lo < 2^32.
+  const std::int64_t hi = a >> 32;
+  const auto lo = static_cast<std::uint32_t>(static_cast<std::uint64_t>(a) & 0xFFFFFFFFu);
+  const std::int64_t hi_product = hi * m;                             // |hi·m| < 2^62
+  const std::int64_t lo_product = static_cast<std::int64_t>(lo) * m;  // |lo·m| < 2^63
+  // a·m = hi_product·2^32 + lo_product = upper·2^32 + lower, 0 <= lower < 2^32.
+  const std::int64_t upper = hi_product + (lo_product >> 32);
+  const auto lower =
+      static_cast<std::uint32_t>(static_cast<std::uint64_t>(lo_product) & 0xFFFFFFFFu);
+  if (shift == 32) {
+    return lower >= 0x80000000u ? upper + 1 : upper;
+  }
+  // shift > 32: the rounding half 2^(shift-1) lies wholly in `upper`, and `lower` is
+  // below one unit of the result, so floor((upper·2^32 + lower + half) / 2^shift) =
+  // floor((upper + 2^(shift-33)) / 2^(shift-32)).
+  const int s = shift - 32;
+  return (upper + (std::int64_t{1} << (s - 1))) >> s;  // |upper| < 2^62.1: no overflow
+}
+
 // |x|, saturating (Abs(Min()) is Max()).
 template <class U, int F, class R>
 constexpr Fixed<U, F, R> Abs(Fixed<U, F, R> x) {

@@ -27,6 +27,10 @@ using Duration = Fixed<Second, 31>;
 using Frequency = Fixed<Hertz, 16>;
 // Q15.16: ±32768, 1.5e-5. Dimensionless gains and ratios (α, PID gains per unit).
 using Ratio = Fixed<Unitless, 16>;
+// Q3.28: ±8, 3.7e-9. Pulley ratio α = r_m / r_j and other precise dimensionless
+// scales: α multiplies angles of up to ~1 rad, so 3.7e-9 relative keeps α·θ_m within
+// one Angle LSB.
+using Scale = Fixed<Unitless, 28>;
 // Q0.15 in int16: [-1, 1), 3.1e-5. H-bridge duty; the G474's 20 kHz PWM has 8500
 // counts (13 bits) per period, so 15 bits lose nothing.
 using Duty = Fixed<Unitless, 15, std::int16_t>;

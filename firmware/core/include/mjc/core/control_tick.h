@@ -1,0 +1,160 @@
+// One control tick of the joint board (design.md §2): the unit the firmware's timer ISR
+// and the simulated board call at 10 kHz. Sample in, actuation out, plus telemetry and
+// events. No allocation, no blocking, no HAL: the caller reads the hardware into a
+// Sample and writes the Actuation back.
+//
+// Order within a tick, so that a fault disables the bridge in the tick that sees it:
+//   1 sample → θ_m (quadrature extension), θ_j (SPI frame, parity checked)
+//   2 forward backlash → θ̃_j;  SEA torque τ = K(θ̃_j − θ_j)
+//   3 velocity θ̇_j (least-squares slope, delay L); τ and the trajectory segment are
+//     delayed by the same L, so P = τ·θ̇_j and its window refer to one instant
+//   4 P into the energy accumulator and the window tracker
+//   5 supervisor: any fault → bridge off now, latched
+//   6 trajectory → setpoint (→ inverse backlash if enabled) → position loop → duty
+// Cost on Cortex-M4: `./bench` prints tick_instructions_cm4.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "mjc/core/backlash.h"
+#include "mjc/core/encoder.h"
+#include "mjc/core/interface_energy.h"
+#include "mjc/core/position_loop.h"
+#include "mjc/core/quantities.h"
+#include "mjc/core/supervisor.h"
+#include "mjc/core/trajectory.h"
+#include "mjc/core/velocity_estimator.h"
+
+namespace mjc {
+
+struct ControlConfig {
+  std::uint32_t tick_hz = 10000;  // 1,000..20,000
+  MotorEncoderConfig motor_encoder;
+  JointEncoderConfig joint_encoder;
+  BacklashConfig backlash;
+  // 2·k·r_j², N·m/rad: (0, 100]. Paper magnitude 0.63.
+  Stiffness sea_stiffness = Stiffness::FromDouble(0.63);
+  // Command the cable side through the inverse backlash model instead of the motor.
+  bool backlash_compensation = false;
+  // Velocity window, ticks: odd, up to kMaxVelocityWindow.
+  std::uint16_t velocity_window = 501;
+  PositionLoopConfig position;
+  SupervisorConfig supervisor;
+};
+
+// Why a config was refused; the previous config stays. Stable numbers.
+enum class ControlConfigError : std::uint8_t {
+  kOk = 0,
+  kTickRate = 1,
+  kMotorEncoder = 2,
+  kJointEncoder = 3,
+  kBacklash = 4,
+  kStiffness = 5,
+  kVelocityWindow = 6,
+  kPositionLoop = 7,
+};
+
+// What the hardware (or the simulator) read at the start of the tick.
+struct Sample {
+  std::uint16_t motor_count = 0;  // quadrature timer count
+  std::uint16_t joint_frame = 0;  // the joint encoder's 16-bit SPI read frame
+  bool tick_overrun = false;      // the previous tick did not finish in time
+  bool command_timeout = false;   // the host's setpoint stream went quiet
+};
+
+struct Actuation {
+  Duty duty;                    // zero whenever the bridge is disabled
+  bool bridge_enabled = false;  // the H-bridge enable line
+};
+
+struct Telemetry {
+  std::uint32_t tick = 0;
+  Angle motor;       // θ_m
+  Angle joint;       // θ_j (last good frame)
+  Angle cable_side;  // θ̃_j
+  Torque torque;     // τ, this tick
+  Angle setpoint;    // motor setpoint commanded this tick
+  Duty duty;
+  // Aligned signals, delay_ticks() old: the instant power and energy refer to.
+  AngularVelocity joint_velocity;
+  Torque aligned_torque;
+  Power power;
+  std::int64_t energy_sum = 0;  // Σ P (raw Q24 W·ticks) since the last ClearEnergy()
+  Segment segment = Segment::kIdle;  // of this tick's setpoint
+  Fault fault = Fault::kNone;        // latched fault, kNone when healthy
+};
+
+struct TickResult {
+  Actuation actuation;
+  Telemetry telemetry;
+  bool window_completed = false;  // `window` holds a new summary
+  WindowSummary window;
+  Fault raised = Fault::kNone;  // a fault latched in this very tick
+};
+
+class ControlTick {
+ public:
+  // 100 ms at 10 kHz: the longest velocity window the storage holds.
+  static constexpr std::uint16_t kMaxVelocityWindow = 1001;
+
+  ControlTick();
+
+  // Validates every part and applies the config; on error nothing changes. Clears the
+  // tick's state (the next Step() starts from its sample).
+  ControlConfigError Configure(const ControlConfig& config);
+
+  // Runs one tick (interrupt context). Writes every field of *out except `window`,
+  // which is written only when window_completed is set: the summary is not copied or
+  // cleared on the other ticks.
+  void ISR_Step(const Sample& sample, TickResult* out);
+
+  // Bridge permission from the application (idle vs running): the bridge is enabled
+  // only while armed and no fault is latched.
+  void Arm(bool armed);
+  bool armed() const { return armed_; }
+
+  // Clears a latched fault if its cause is gone (checked on the last sample).
+  bool ClearFaults();
+  Fault fault() const { return supervisor_.latched(); }
+
+  TrajectoryGenerator& trajectory() { return trajectory_; }
+  void ClearEnergy() { energy_.Clear(); }
+  std::uint16_t delay_ticks() const { return estimator_.delay_ticks(); }
+  EnergyScale energy_scale() const { return EnergyScale(config_.tick_hz); }
+  const ControlConfig& config() const { return config_; }
+
+ private:
+  void Restart();
+
+  ControlConfig config_;
+  MotorEncoderState motor_state_;
+  MotorEncoder motor_encoder_;
+  BacklashModel::State backlash_state_;
+  BacklashModel backlash_;
+  InverseBacklash::State inverse_state_;
+  InverseBacklash inverse_;
+  std::array<std::int32_t, kMaxVelocityWindow> window_storage_{};
+  std::array<std::int32_t, kMaxVelocityWindow / 2> torque_storage_{};
+  std::array<std::int32_t, kMaxVelocityWindow / 2> segment_storage_{};
+  VelocityEstimator estimator_;
+  DelayLine torque_delay_;
+  DelayLine segment_delay_;
+  EnergyAccumulator energy_;
+  WindowTracker windows_;
+  TrajectoryGenerator trajectory_;
+  PositionLoop::State loop_state_;
+  PositionLoop loop_;
+  Supervisor::State supervisor_state_;
+  Supervisor supervisor_;
+  SupervisorInput last_input_;
+
+  std::uint32_t tick_ = 0;
+  bool started_ = false;
+  bool armed_ = false;
+  Angle joint_;  // last good θ_j
+  std::uint16_t joint_count_ = 0;
+  Duty last_duty_;
+};
+
+}  // namespace mjc

@@ -1,0 +1,105 @@
+// The supervisor: every check that can stop the motor, run on every tick's sample
+// before any duty is applied. A fault disables the bridge in the tick that detects it
+// and latches: the bridge stays off until the host clears the fault and the cause is
+// gone (Clear() re-runs the checks on the current sample).
+#pragma once
+
+#include <cstdint>
+
+#include "mjc/core/encoder.h"
+#include "mjc/core/quantities.h"
+
+namespace mjc {
+
+// Stable numbers grouped by range: they travel over CAN and into logs; never renumber.
+enum class Fault : std::uint16_t {
+  kNone = 0,
+  // 100–199: sensors
+  kJointParity = 100,     // joint encoder frame failed parity
+  kJointErrorFlag = 101,  // joint encoder raised EF
+  kJointJump = 102,       // joint angle moved more in one tick than it physically can
+  kJointStuck = 103,      // joint count frozen while the motor travelled far
+  kMotorStuck = 111,      // motor count frozen under sustained duty
+  // 200–299: limits
+  kJointAngleLimit = 200,
+  kMotorAngleLimit = 201,
+  kTorqueLimit = 202,
+  kVelocityLimit = 203,
+  // 300–399: timing and commands
+  kTickOverrun = 300,     // the previous tick did not finish in its period
+  kCommandTimeout = 301,  // streamed setpoints stopped arriving
+};
+
+struct SupervisorConfig {
+  Angle joint_min = Angle::FromDouble(-1.6);  // rad
+  Angle joint_max = Angle::FromDouble(1.6);
+  Angle motor_min = Angle::FromDouble(-2.0);  // motor-pulley rad
+  Angle motor_max = Angle::FromDouble(2.0);
+  Torque torque_max = Torque::FromDouble(1.0);                      // |τ|, N·m
+  AngularVelocity velocity_max = AngularVelocity::FromDouble(5.0);  // |θ̇_j|, rad/s
+  // Largest plausible joint step in one tick: 0.01 rad per 100 µs is 100 rad/s, twenty
+  // times the velocity limit; a bigger step is a corrupted reading.
+  Angle joint_jump_max = Angle::FromDouble(0.01);
+  // Motor travel with the joint count frozen: the slack (≈ 2°) plus the full spring
+  // deflection (0.2 N·m / 0.63 N·m/rad ≈ 0.32 rad) is under 0.4 rad; 0.6 rad cannot be.
+  Angle stuck_motor_travel = Angle::FromDouble(0.6);
+  // |duty| at or above this with the motor count frozen for motor_stuck_ticks: stalled
+  // motor or dead encoder.
+  Duty stuck_duty = Duty::FromDouble(0.3);
+  std::uint32_t motor_stuck_ticks = 2000;  // 200 ms at 10 kHz
+};
+
+// What the supervisor looks at each tick.
+struct SupervisorInput {
+  JointFrameStatus joint_status = JointFrameStatus::kOk;
+  std::uint16_t joint_count = 0;  // raw 14-bit count of a good frame
+  Angle joint;                    // θ_j of a good frame
+  std::int64_t motor_count = 0;   // extended quadrature count
+  Angle motor;                    // θ_m
+  Torque torque;                  // SEA torque τ
+  AngularVelocity joint_velocity;
+  Duty applied_duty;  // the duty applied over the previous tick
+  bool tick_overrun = false;
+  bool command_timeout = false;
+};
+
+class Supervisor {
+ public:
+  struct State {
+    Fault latched = Fault::kNone;
+    std::uint32_t fault_tick = 0;
+    // Stuck and jump detection history.
+    bool have_history = false;
+    Angle last_joint;
+    std::uint16_t last_joint_count = 0;
+    Angle motor_at_joint_change;
+    std::int64_t last_motor_count = 0;
+    std::uint32_t motor_frozen_ticks = 0;
+    void Clear() { *this = State{}; }
+  };
+
+  Supervisor(const SupervisorConfig* config, State* state)
+      : config_(config), state_(state) {}
+
+  // Runs every check; latches and returns the first fault found (checked in the order
+  // of the enum's ranges: sensors, limits, timing). Returns kNone while healthy, and
+  // the latched fault once one is latched.
+  Fault Check(std::uint32_t tick, const SupervisorInput& in);
+
+  bool bridge_enabled() const { return state_->latched == Fault::kNone; }
+  Fault latched() const { return state_->latched; }
+
+  // The host's "clear faults": succeeds, and re-enables, only if `in` passes every
+  // check that does not need history (sensor status, limits, timing). Jump and stuck
+  // history restarts from `in`.
+  bool Clear(const SupervisorInput& in);
+
+ private:
+  Fault Evaluate(const SupervisorInput& in, bool with_history) const;
+  void Remember(const SupervisorInput& in);
+
+  const SupervisorConfig* config_;
+  State* state_;
+};
+
+}  // namespace mjc

@@ -1,0 +1,72 @@
+#include "mjc/core/backlash.h"
+
+namespace mjc {
+namespace {
+
+Angle Scaled(Scale alpha, Angle a) { return Mul<Angle>(alpha, a); }
+
+}  // namespace
+
+BacklashConfigError Validate(const BacklashConfig& config) {
+  if (config.alpha <= Scale{} || config.alpha == Scale::Max()) {
+    return BacklashConfigError::kAlphaOutOfRange;
+  }
+  if (Abs(config.c_right) > kMaxBacklashOffset ||
+      Abs(config.c_left) > kMaxBacklashOffset) {
+    return BacklashConfigError::kOffsetOutOfRange;
+  }
+  if (config.c_left > config.c_right) return BacklashConfigError::kLeftAboveRight;
+  return BacklashConfigError::kOk;
+}
+
+Angle BacklashModel::LowerEdge(Angle motor) const {
+  return Scaled(config_->alpha, motor - config_->c_right);
+}
+
+Angle BacklashModel::UpperEdge(Angle motor) const {
+  return Scaled(config_->alpha, motor - config_->c_left);
+}
+
+Angle BacklashModel::Reset(Angle motor, Angle joint) {
+  state_->output = Clamp(joint, LowerEdge(motor), UpperEdge(motor));
+  state_->initialized = true;
+  return state_->output;
+}
+
+Angle BacklashModel::Update(Angle motor) {
+  if (!state_->initialized) {
+    // No joint reading to start from: the middle of the band.
+    const Angle lo = LowerEdge(motor);
+    const Angle hi = UpperEdge(motor);
+    return Reset(motor, Angle::FromRaw(lo.raw() + (hi - lo).raw() / 2));
+  }
+  state_->output = Clamp(state_->output, LowerEdge(motor), UpperEdge(motor));
+  return state_->output;
+}
+
+InverseBacklash::InverseBacklash(const BacklashConfig* config, State* state)
+    : config_(config), state_(state) {
+  Configure();
+}
+
+void InverseBacklash::Configure() {
+  alpha_inverse_ = Divide<Scale>(Scale(1), config_->alpha);
+}
+
+Angle InverseBacklash::Command(Angle wanted) {
+  const Angle base = Mul<Angle>(alpha_inverse_, wanted);
+  if (!state_->initialized) {
+    // Unknown direction: centre of the slack.
+    state_->last_command =
+        base + Angle::FromRaw(config_->c_left.raw() / 2 + config_->c_right.raw() / 2);
+    state_->initialized = true;
+  } else if (wanted > state_->last_wanted) {
+    state_->last_command = base + config_->c_right;
+  } else if (wanted < state_->last_wanted) {
+    state_->last_command = base + config_->c_left;
+  }
+  state_->last_wanted = wanted;
+  return state_->last_command;
+}
+
+}  // namespace mjc

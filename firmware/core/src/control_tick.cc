@@ -1,0 +1,187 @@
+#include "mjc/core/control_tick.h"
+
+#include <span>
+
+namespace mjc {
+namespace {
+
+// The segment and its repetition travel through one delay line as one word.
+std::int32_t PackSegment(Segment s, std::uint16_t repetition) {
+  return static_cast<std::int32_t>((static_cast<std::uint32_t>(repetition) << 8) |
+                                   static_cast<std::uint32_t>(s));
+}
+Segment UnpackSegment(std::int32_t word) {
+  return static_cast<Segment>(static_cast<std::uint32_t>(word) & 0xFFu);
+}
+std::uint16_t UnpackRepetition(std::int32_t word) {
+  return static_cast<std::uint16_t>(static_cast<std::uint32_t>(word) >> 8);
+}
+
+}  // namespace
+
+ControlTick::ControlTick()
+    : motor_encoder_(&config_.motor_encoder, &motor_state_),
+      backlash_(&config_.backlash, &backlash_state_),
+      inverse_(&config_.backlash, &inverse_state_),
+      estimator_(window_storage_),
+      torque_delay_(std::span<std::int32_t>{}),
+      segment_delay_(std::span<std::int32_t>{}),
+      windows_(config_.tick_hz),
+      loop_(&config_.position, &loop_state_),
+      supervisor_(&config_.supervisor, &supervisor_state_) {
+  Configure(config_);
+}
+
+ControlConfigError ControlTick::Configure(const ControlConfig& config) {
+  if (config.tick_hz < 1000 || config.tick_hz > 20000)
+    return ControlConfigError::kTickRate;
+  if (ValidateMotorEncoderConfig(config.motor_encoder) != MotorEncoderConfigError::kOk) {
+    return ControlConfigError::kMotorEncoder;
+  }
+  if (ValidateJointEncoderConfig(config.joint_encoder) != JointEncoderConfigError::kOk) {
+    return ControlConfigError::kJointEncoder;
+  }
+  if (Validate(config.backlash) != BacklashConfigError::kOk) {
+    return ControlConfigError::kBacklash;
+  }
+  if (config.sea_stiffness <= Stiffness{} || config.sea_stiffness > Stiffness(100)) {
+    return ControlConfigError::kStiffness;
+  }
+  if (config.velocity_window > kMaxVelocityWindow)
+    return ControlConfigError::kVelocityWindow;
+  PositionLoopConfig position = config.position;
+  position.tick_hz = config.tick_hz;
+  if (Validate(position) != PositionLoopError::kOk)
+    return ControlConfigError::kPositionLoop;
+  // The estimator validates against its storage; try it before touching anything.
+  VelocityEstimatorConfig velocity{.window = config.velocity_window,
+                                   .tick_hz = config.tick_hz};
+  if (estimator_.Configure(velocity) != VelocityEstimatorError::kOk) {
+    // Restore the estimator to the config still in force.
+    estimator_.Configure({.window = config_.velocity_window, .tick_hz = config_.tick_hz});
+    return ControlConfigError::kVelocityWindow;
+  }
+
+  config_ = config;
+  config_.position.tick_hz = config.tick_hz;
+  motor_encoder_.Reconfigure();
+  inverse_.Configure();
+  loop_.Configure();
+  const std::size_t delay = estimator_.delay_ticks();
+  torque_delay_ = DelayLine(std::span<std::int32_t>(torque_storage_.data(), delay));
+  segment_delay_ = DelayLine(std::span<std::int32_t>(segment_storage_.data(), delay));
+  windows_ = WindowTracker(config_.tick_hz);
+  trajectory_ = TrajectoryGenerator(config_.tick_hz);
+  Restart();
+  return ControlConfigError::kOk;
+}
+
+void ControlTick::Restart() {
+  started_ = false;
+  motor_state_.Clear();
+  backlash_state_.Clear();
+  inverse_state_.Clear();
+  loop_state_.Clear();
+  supervisor_state_.Clear();
+  windows_.Clear();
+  energy_.Clear();
+  tick_ = 0;
+  last_duty_ = Duty{};
+}
+
+void ControlTick::Arm(bool armed) {
+  if (armed && !armed_) loop_state_.Clear();  // no stale integral on enable
+  armed_ = armed;
+}
+
+bool ControlTick::ClearFaults() { return supervisor_.Clear(last_input_); }
+
+void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
+  TickResult& r = *out;
+  Telemetry& t = r.telemetry;
+  r.raised = Fault::kNone;
+
+  // 1. Sensors.
+  if (!started_) motor_encoder_.Reset(sample.motor_count);
+  const Angle motor = motor_encoder_.Update(sample.motor_count);
+  const JointSample joint_sample =
+      DecodeJointFrame(sample.joint_frame, config_.joint_encoder);
+  if (joint_sample.status == JointFrameStatus::kOk) {
+    joint_ = joint_sample.angle;
+    joint_count_ = joint_sample.count;
+  }
+  if (!started_) {
+    backlash_.Reset(motor, joint_);
+    estimator_.Reset(joint_);
+    torque_delay_.Fill(0);
+    segment_delay_.Fill(PackSegment(Segment::kIdle, 0));
+    started_ = true;
+  }
+
+  // 2. Cable side and SEA torque (eqs. 4, 5).
+  const Angle cable = backlash_.Update(motor);
+  const Torque torque = Mul<Torque>(config_.sea_stiffness, cable - joint_);
+
+  // 3.–4. Aligned velocity, torque and segment; power and energy (eq. 3).
+  const AngularVelocity velocity = estimator_.Update(joint_);
+  const Torque aligned_torque = Torque::FromRaw(torque_delay_.Push(torque.raw()));
+  const Power power = Mul<Power>(aligned_torque, velocity);
+  energy_.Add(power);
+
+  // 5. Supervisor, before any duty is computed.
+  SupervisorInput& in = last_input_;
+  in.joint_status = joint_sample.status;
+  in.joint_count = joint_count_;
+  in.joint = joint_;
+  in.motor_count = motor_encoder_.extended_count();
+  in.motor = motor;
+  in.torque = torque;
+  in.joint_velocity = velocity;
+  in.applied_duty = last_duty_;
+  in.tick_overrun = sample.tick_overrun;
+  in.command_timeout = sample.command_timeout;
+  const bool was_healthy = supervisor_.bridge_enabled();
+  const Fault fault = supervisor_.Check(tick_, in);
+  if (was_healthy && fault != Fault::kNone) {
+    r.raised = fault;
+    trajectory_.Stop();
+  }
+
+  // 6. Trajectory and position loop.
+  const TrajectoryPoint point = trajectory_.Step();
+  const std::int32_t segment_word =
+      segment_delay_.Push(PackSegment(point.segment, point.repetition));
+  const std::uint32_t aligned_tick = tick_ - estimator_.delay_ticks();
+  r.window_completed =
+      windows_.Update(aligned_tick, UnpackSegment(segment_word),
+                      UnpackRepetition(segment_word), power, aligned_torque, &r.window);
+
+  const Angle setpoint =
+      config_.backlash_compensation ? inverse_.Command(point.position) : point.position;
+  const bool enabled = armed_ && supervisor_.bridge_enabled();
+  Duty duty;
+  if (enabled) {
+    duty = loop_.Update(setpoint, point.velocity, motor);
+  } else {
+    loop_state_.Clear();
+  }
+  last_duty_ = duty;
+  r.actuation = {duty, enabled};
+
+  t.tick = tick_;
+  t.motor = motor;
+  t.joint = joint_;
+  t.cable_side = cable;
+  t.torque = torque;
+  t.setpoint = setpoint;
+  t.duty = duty;
+  t.joint_velocity = velocity;
+  t.aligned_torque = aligned_torque;
+  t.power = power;
+  t.energy_sum = energy_.raw_sum();
+  t.segment = point.segment;
+  t.fault = supervisor_.latched();
+  ++tick_;
+}
+
+}  // namespace mjc

@@ -1,0 +1,64 @@
+#include "mjc/core/velocity_estimator.h"
+
+namespace mjc {
+
+void DelayLine::Fill(std::int32_t value) {
+  for (auto& slot : storage_) slot = value;
+  next_ = 0;
+}
+
+VelocityEstimatorError VelocityEstimator::Configure(
+    const VelocityEstimatorConfig& config) {
+  if (config.window % 2 == 0) return VelocityEstimatorError::kWindowEven;
+  if (config.window < kMinWindow) return VelocityEstimatorError::kWindowTooShort;
+  if (config.window > storage_.size()) return VelocityEstimatorError::kWindowTooLong;
+  if (config.tick_hz < 100 || config.tick_hz > 100000) {
+    return VelocityEstimatorError::kTickRateOutOfRange;
+  }
+  // Velocity in Q20 from a slope in raw Q24 angle per tick:
+  //   ω_raw = (S1 − c·S0) · f / (D · 2^4).
+  // Pick the largest shift whose multiplier still fits in 30 bits (precision ≥ 2^-29).
+  const auto n = static_cast<std::int64_t>(config.window);
+  const std::int64_t d = n * (n * n - 1) / 12;
+  const std::int64_t denominator = 16 * d;
+  std::int64_t best_m = 0;
+  int best_shift = 0;
+  for (int s = 32; s <= 62; ++s) {
+    const std::int64_t f = config.tick_hz;
+    if (f > (std::int64_t{1} << (62 - s))) break;  // f·2^s must fit
+    const std::int64_t m = ((f << s) + denominator / 2) / denominator;
+    if (m >= (std::int64_t{1} << 30)) break;
+    best_m = m;
+    best_shift = s;
+  }
+  if (best_m == 0) return VelocityEstimatorError::kWindowTooShort;
+  window_ = config.window;
+  multiplier_ = static_cast<std::int32_t>(best_m);
+  shift_ = best_shift;
+  Reset(Angle{});
+  return VelocityEstimatorError::kOk;
+}
+
+void VelocityEstimator::Reset(Angle angle) {
+  const std::int64_t x = angle.raw();
+  for (std::size_t i = 0; i < window_; ++i) storage_[i] = angle.raw();
+  oldest_ = 0;
+  const std::int64_t n = window_;
+  s0_ = n * x;
+  s1_ = (n * (n - 1) / 2) * x;
+}
+
+AngularVelocity VelocityEstimator::Update(Angle angle) {
+  if (window_ == 0) return AngularVelocity{};
+  const std::int64_t x_new = angle.raw();
+  const std::int64_t x_old = storage_[oldest_];
+  storage_[oldest_] = angle.raw();
+  oldest_ = oldest_ + 1 == window_ ? 0 : oldest_ + 1;
+  s1_ = s1_ - s0_ + x_old + static_cast<std::int64_t>(window_ - 1) * x_new;
+  s0_ = s0_ - x_old + x_new;
+  const std::int64_t centred = s1_ - static_cast<std::int64_t>(window_ / 2) * s0_;
+  const std::int64_t v = MulShiftRound(centred, multiplier_, shift_);
+  return AngularVelocity::FromRaw(fixed_detail::SaturateTo<std::int32_t>(v));
+}
+
+}  // namespace mjc
