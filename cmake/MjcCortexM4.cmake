@@ -7,7 +7,7 @@ target_compile_options(mjc_cortex_m4 INTERFACE
   ${MJC_CM4_CPU_FLAGS}
   -ffunction-sections -fdata-sections -fno-common
   $<$<COMPILE_LANGUAGE:CXX>:-fno-exceptions -fno-rtti -fno-threadsafe-statics>
-  -fstack-usage
+  -fstack-usage -fcallgraph-info=su
   # GCC notes that passing small structs changed ABI in GCC 7.1; every object here is
   # built by one compiler, so the note is noise.
   -Wno-psabi)
