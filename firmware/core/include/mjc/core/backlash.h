@@ -17,8 +17,8 @@ namespace mjc {
 
 struct BacklashConfig {
   Scale alpha = Scale::FromDouble(1.0);  // r_m / r_j, legal (0, 8)
-  Angle c_right = Angle{};               // c_r, rad, legal [-kMaxOffset, kMaxOffset]
-  Angle c_left = Angle{};                // c_l, rad, legal [-kMaxOffset, c_r]
+  Angle c_right = Angle{};  // c_r, rad, [-kMaxBacklashOffset, kMaxBacklashOffset]
+  Angle c_left = Angle{};   // c_l, rad, [-kMaxBacklashOffset, c_r]
 };
 
 // A cable slack offset beyond ±0.5 rad (29°) is not a Bowden cable that works.

@@ -39,7 +39,7 @@ struct ControlConfig {
   bool backlash_compensation = false;
   // Velocity window, ticks: odd, up to kMaxVelocityWindow.
   std::uint16_t velocity_window = 501;
-  PositionLoopConfig position;
+  PositionLoopConfig position;  // its tick_hz is ignored: tick_hz above applies
   SupervisorConfig supervisor;
 };
 
