@@ -1,0 +1,406 @@
+#include "paper_report.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+#include "mjc/host/report.h"
+
+namespace mjc::paper {
+namespace {
+
+namespace fs = std::filesystem;
+using host::CsvTable;
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kMilli = 1e3;
+
+std::string Format(const char* fmt, double a) {
+  char text[64];
+  std::snprintf(text, sizeof text, fmt, a);
+  return text;
+}
+
+std::string PlusMinus(const host::Stats& s, double scale, const char* fmt, bool se) {
+  return Format(fmt, s.mean * scale) + " ± " + Format(fmt, (se ? s.se : s.std) * scale);
+}
+
+nlohmann::json StatsJson(const host::Stats& s) {
+  return {{"n", s.n}, {"mean", s.mean}, {"std", s.std}, {"se", s.se}};
+}
+
+// Relative error of a board window energy against truth, in % of |truth load|.
+double WindowEnergyErrorPct(const sim::WindowOutcome& w) {
+  const double scale = std::fabs(w.truth_load);
+  if (scale == 0) return 0;
+  const double e1 = std::fabs(w.load - w.truth_load);
+  const double e2 = std::fabs(w.unload - w.truth_unload);
+  return 100.0 * std::max(e1, e2) / scale;
+}
+
+}  // namespace
+
+Report::Report(fs::path out, bool quiet) : out_(std::move(out)), quiet_(quiet) {
+  fs::create_directories(out_);
+}
+
+void Report::Progress(const std::string& stage, double fraction) {
+  if (quiet_) return;
+  std::fprintf(stderr, "[%3.0f%%] %s\n", 100.0 * std::clamp(fraction, 0.0, 1.0),
+               stage.c_str());
+}
+
+void Report::Print(const std::string& text) {
+  std::fputs(text.c_str(), stdout);
+  std::fflush(stdout);
+  tables_ += text;
+}
+
+void Report::Figure(const std::string& name, const std::string& script) {
+  const fs::path path = out_ / (name + ".gp");
+  std::ofstream(path) << "set terminal pngcairo size 900,600 font ',11'\nset output '"
+                      << name << ".png'\nset grid\nset key top left\n"
+                      << script;
+  std::string why;
+  if (host::RunGnuplot(path, &why)) {
+    figures_.push_back(name + ".png");
+  } else {
+    ++failed_figures_;
+    std::fprintf(stderr, "mjc-paper: figure %s not made: %s\n", name.c_str(),
+                 why.c_str());
+  }
+}
+
+void Report::Calibration(const sim::CalibrationOutcome& cal) {
+  const double deg = 180.0 / kPi;
+  Print(
+      "\n## Calibration (Fig. 7): increasing sinusoid on the robot alone, NLopt fit\n\n");
+  Print("| offset | plant (°) | fitted (°) | error (°) |\n|---|---|---|---|\n");
+  Print("| c_r | " + Format("%.4f", cal.true_c_right_rad * deg) + " | " +
+        Format("%.4f", cal.fit.c_right_rad * deg) + " | " +
+        Format("%+.4f", cal.error_right_deg) + " |\n");
+  Print("| c_l | " + Format("%.4f", cal.true_c_left_rad * deg) + " | " +
+        Format("%.4f", cal.fit.c_left_rad * deg) + " | " +
+        Format("%+.4f", cal.error_left_deg) + " |\n\n");
+  Print("fit: " + std::string(host::ToString(cal.fit.status)) + ", rms " +
+        Format("%.3f", cal.fit.rms_error_rad * deg) + "°, joint lag " +
+        Format("%.2f", cal.fit.lag_s * 1e3) + " ms, " +
+        Format("%.1f", cal.fit.elapsed_ms) + " ms, " +
+        std::to_string(cal.fit.evaluations) + " evaluations; " + cal.message + "\n");
+
+  CsvTable csv({"motor_rad", "joint_rad"});
+  for (std::size_t i = 0; i < cal.motor_rad.size(); ++i) {
+    csv.AddRow({CsvTable::Number(cal.motor_rad[i]), CsvTable::Number(cal.joint_rad[i])});
+  }
+  csv.Write(out_ / "calibration.csv");
+  json_["calibration"] = {{"true_c_right_rad", cal.true_c_right_rad},
+                          {"true_c_left_rad", cal.true_c_left_rad},
+                          {"fit_c_right_rad", cal.fit.c_right_rad},
+                          {"fit_c_left_rad", cal.fit.c_left_rad},
+                          {"error_right_deg", cal.error_right_deg},
+                          {"error_left_deg", cal.error_left_deg},
+                          {"rms_error_rad", cal.fit.rms_error_rad},
+                          {"joint_lag_s", cal.fit.lag_s},
+                          {"fit_ms", cal.fit.elapsed_ms},
+                          {"evaluations", cal.fit.evaluations},
+                          {"uploaded", cal.uploaded},
+                          {"message", cal.message}};
+  const double cr = cal.fit.c_right_rad * deg, cl = cal.fit.c_left_rad * deg;
+  Figure("fig7_calibration",
+         "set title 'Backlash calibration: joint vs motor angle (robot alone)'\n"
+         "set xlabel 'motor pulley angle (deg)'\nset ylabel 'joint angle (deg)'\n"
+         "set datafile separator ','\nd = 180/pi\n"
+         "plot 'calibration.csv' every ::1 using ($1*d):($2*d) with lines lw 1 title "
+         "'measured', x - " +
+             Format("%.5f", cr) + " with lines dt 2 lw 2 title 'θ_m − c_r (fit)', x - " +
+             Format("%.5f", cl) + " with lines dt 3 lw 2 title 'θ_m − c_l (fit)'\n");
+}
+
+void Report::Trial(const sim::TrialOutcome& trial, double amplitude_deg) {
+  CsvTable csv({"t_s", "setpoint_rad", "motor_rad", "joint_rad", "torque_Nm", "power_W",
+                "truth_power_W"});
+  for (const auto& r : trial.trace) {
+    csv.AddRow({CsvTable::Number(r.t), CsvTable::Number(r.setpoint),
+                CsvTable::Number(r.motor), CsvTable::Number(r.joint),
+                CsvTable::Number(r.torque), CsvTable::Number(r.power),
+                CsvTable::Number(r.truth_power)});
+  }
+  csv.Write(out_ / "trial_timeseries.csv");
+  Figure("fig8_trial",
+         "set datafile separator ','\nset multiplot layout 3,1 title 'One trial: " +
+             Format("%.0f", amplitude_deg) +
+             "° at 0.5 Hz, five repetitions'\nd = 180/pi\nset ylabel 'angle (deg)'\n"
+             "plot 'trial_timeseries.csv' every ::1 using 1:($3*d) with lines title "
+             "'motor', "
+             "'' every ::1 using 1:($4*d) with lines title 'joint'\n"
+             "set ylabel 'torque (N·m)'\nplot 'trial_timeseries.csv' every ::1 using 1:5 "
+             "with "
+             "lines title 'SEA torque (board)'\n"
+             "set ylabel 'power (mW)'\nset xlabel 'time (s)'\n"
+             "plot 'trial_timeseries.csv' every ::1 using 1:($6*1000) with lines title "
+             "'board "
+             "estimate', '' every ::1 using 1:($7*1000) with lines dt 2 title 'plant "
+             "truth'\n"
+             "unset multiplot\n");
+}
+
+void Report::Repeatability(const sim::RepeatabilityOutcome& rep, double amplitude_deg) {
+  Print("\n## Table I: energy loss η for the repeatability study (" +
+        Format("%.0f", amplitude_deg) +
+        "°, 0.5 Hz, 5 trials × middle 3 of 5 flexions, re-donned)\n\n");
+  Print("| | board mean | board std | truth mean | truth std |\n|---|---|---|---|---|\n");
+  CsvTable csv({"trial", "repetition", "eta_pct", "truth_eta_pct", "load_J",
+                "truth_load_J", "unload_J", "truth_unload_J"});
+  nlohmann::json trials = nlohmann::json::array();
+  for (std::size_t i = 0; i < rep.eta.size(); ++i) {
+    Print("| Trial " + std::to_string(i + 1) + " | " + Format("%.2f%%", rep.eta[i].mean) +
+          " | " + Format("%.3f%%", rep.eta[i].std) + " | " +
+          Format("%.2f%%", rep.truth_eta[i].mean) + " | " +
+          Format("%.3f%%", rep.truth_eta[i].std) + " |\n");
+    for (const auto* w : sim::AnalysedFlexions(rep.trials[i], 5)) {
+      csv.AddRow({std::to_string(i + 1), std::to_string(w->repetition),
+                  CsvTable::Number(w->eta), CsvTable::Number(w->truth_eta),
+                  CsvTable::Number(w->load), CsvTable::Number(w->truth_load),
+                  CsvTable::Number(w->unload), CsvTable::Number(w->truth_unload)});
+    }
+    trials.push_back(
+        {{"eta", StatsJson(rep.eta[i])}, {"truth_eta", StatsJson(rep.truth_eta[i])}});
+  }
+  Print("| Overall | " + Format("%.2f%%", rep.overall.mean) + " | " +
+        Format("%.3f%%", rep.overall.std) + " | " +
+        Format("%.2f%%", rep.truth_overall.mean) + " | " +
+        Format("%.3f%%", rep.truth_overall.std) + " |\n");
+  csv.Write(out_ / "repeatability.csv");
+  json_["repeatability"] = {{"amplitude_deg", amplitude_deg},
+                            {"trials", trials},
+                            {"overall", StatsJson(rep.overall)},
+                            {"truth_overall", StatsJson(rep.truth_overall)}};
+
+  // Fig. 9: per trial, the mean of its three flexion power profiles ± one std.
+  CsvTable prof({"fraction", "trial", "mean_mW", "std_mW", "truth_mean_mW"});
+  double peak_fraction = 0.5;
+  for (std::size_t i = 0; i < rep.trials.size(); ++i) {
+    const auto flex = sim::AnalysedFlexions(rep.trials[i], 5);
+    if (flex.empty()) continue;
+    peak_fraction = flex.front()->peak_fraction;
+    for (int k = 0; k < sim::kProfilePoints; ++k) {
+      std::vector<double> v, tv;
+      for (const auto* w : flex) {
+        v.push_back(w->profile[static_cast<std::size_t>(k)] * kMilli);
+        tv.push_back(w->truth_profile[static_cast<std::size_t>(k)] * kMilli);
+      }
+      const host::Stats s = host::Describe(v);
+      prof.AddRow({CsvTable::Number(k / double{sim::kProfilePoints - 1}),
+                   std::to_string(i + 1), CsvTable::Number(s.mean),
+                   CsvTable::Number(s.std), CsvTable::Number(host::Describe(tv).mean)});
+    }
+  }
+  prof.Write(out_ / "repeatability_profiles.csv");
+  Figure("fig9_repeatability",
+         "set title 'Interface power over the flexion window, five re-donned trials'\n"
+         "set xlabel 'flexion window (fraction)'\nset ylabel 'power (mW)'\n"
+         "set datafile separator ','\nset style fill transparent solid 0.2 noborder\n"
+         "set arrow from " +
+             Format("%.4f", peak_fraction) + ", graph 0 to " +
+             Format("%.4f", peak_fraction) +
+             ", graph 1 nohead dt 3\n"
+             "plot for [t=1:5] 'repeatability_profiles.csv' every ::1 using "
+             "1:($2==t ? $3-$4 : 1/0):($2==t ? $3+$4 : 1/0) with filledcurves notitle, "
+             "for [t=1:5] '' every ::1 using 1:($2==t ? $3 : 1/0) with lines lw 2 title "
+             "sprintf('trial %d', t)\n");
+}
+
+void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
+  Print(
+      "\n## Amplitude sweep (Figs. 10–12): work per flexion (mJ), mean ± SE of the "
+      "middle "
+      "three of five; board estimate vs plant truth\n");
+  CsvTable csv({"subject", "amplitude_deg", "load_mJ", "load_se_mJ", "truth_load_mJ",
+                "unload_mJ", "unload_se_mJ", "truth_unload_mJ", "net_mJ", "net_se_mJ",
+                "truth_net_mJ", "eta_pct", "truth_eta_pct", "power_rmse_pct_peak"});
+  nlohmann::json subjects = nlohmann::json::array();
+  for (const auto& s : sweeps) {
+    Print("\n### " + s.subject +
+          "\n\n| amplitude | loading board | loading truth | unloading board | unloading "
+          "truth | net board | net truth | η board | η truth |\n"
+          "|---|---|---|---|---|---|---|---|---|\n");
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& p : s.points) {
+      Print("| " + Format("%.0f°", p.amplitude_deg) + " | " +
+            PlusMinus(p.load, kMilli, "%.3f", true) + " | " +
+            Format("%.3f", p.truth_load.mean * kMilli) + " | " +
+            PlusMinus(p.unload, kMilli, "%.3f", true) + " | " +
+            Format("%.3f", p.truth_unload.mean * kMilli) + " | " +
+            PlusMinus(p.net, kMilli, "%.3f", true) + " | " +
+            Format("%.3f", p.truth_net.mean * kMilli) + " | " +
+            Format("%.1f%%", p.eta.mean) + " | " + Format("%.1f%%", p.truth_eta.mean) +
+            " |\n");
+      csv.AddRow(
+          {s.subject, CsvTable::Number(p.amplitude_deg),
+           CsvTable::Number(p.load.mean * kMilli), CsvTable::Number(p.load.se * kMilli),
+           CsvTable::Number(p.truth_load.mean * kMilli),
+           CsvTable::Number(p.unload.mean * kMilli),
+           CsvTable::Number(p.unload.se * kMilli),
+           CsvTable::Number(p.truth_unload.mean * kMilli),
+           CsvTable::Number(p.net.mean * kMilli), CsvTable::Number(p.net.se * kMilli),
+           CsvTable::Number(p.truth_net.mean * kMilli), CsvTable::Number(p.eta.mean),
+           CsvTable::Number(p.truth_eta.mean), CsvTable::Number(p.power_rmse_pct_peak)});
+      points.push_back({{"amplitude_deg", p.amplitude_deg},
+                        {"load_J", StatsJson(p.load)},
+                        {"unload_J", StatsJson(p.unload)},
+                        {"net_J", StatsJson(p.net)},
+                        {"eta_pct", StatsJson(p.eta)},
+                        {"truth_load_J", StatsJson(p.truth_load)},
+                        {"truth_unload_J", StatsJson(p.truth_unload)},
+                        {"truth_net_J", StatsJson(p.truth_net)},
+                        {"truth_eta_pct", StatsJson(p.truth_eta)},
+                        {"power_rmse_pct_peak", p.power_rmse_pct_peak}});
+    }
+    subjects.push_back(
+        {{"subject", s.subject},
+         {"points", points},
+         {"rmse_J",
+          {{"load", s.rmse_load}, {"unload", s.rmse_unload}, {"net", s.rmse_net}}},
+         {"nrmse_pct",
+          {{"load", s.nrmse_load}, {"unload", s.nrmse_unload}, {"net", s.nrmse_net}}}});
+  }
+  csv.Write(out_ / "amplitude_sweep.csv");
+
+  Print(
+      "\n## Tables II–III: board estimate vs plant truth across amplitudes\n\n"
+      "| subject | RMSE loading (mJ) | RMSE unloading (mJ) | RMSE net (mJ) | NRMSE "
+      "loading | "
+      "NRMSE unloading | NRMSE net |\n|---|---|---|---|---|---|---|\n");
+  CsvTable rmse({"subject", "rmse_load_mJ", "rmse_unload_mJ", "rmse_net_mJ",
+                 "nrmse_load_pct", "nrmse_unload_pct", "nrmse_net_pct"});
+  for (const auto& s : sweeps) {
+    Print("| " + s.subject + " | " + Format("%.4f", s.rmse_load * kMilli) + " | " +
+          Format("%.4f", s.rmse_unload * kMilli) + " | " +
+          Format("%.4f", s.rmse_net * kMilli) + " | " + Format("%.2f%%", s.nrmse_load) +
+          " | " + Format("%.2f%%", s.nrmse_unload) + " | " +
+          Format("%.2f%%", s.nrmse_net) + " |\n");
+    rmse.AddRow({s.subject, CsvTable::Number(s.rmse_load * kMilli),
+                 CsvTable::Number(s.rmse_unload * kMilli),
+                 CsvTable::Number(s.rmse_net * kMilli), CsvTable::Number(s.nrmse_load),
+                 CsvTable::Number(s.nrmse_unload), CsvTable::Number(s.nrmse_net)});
+  }
+  rmse.Write(out_ / "rmse.csv");
+  json_["amplitude_sweep"] = subjects;
+
+  // Fidelity over the whole sweep.
+  double worst_power = 0, worst_energy = 0, worst_eta = 0;
+  for (const auto& s : sweeps) {
+    for (const auto& p : s.points) {
+      worst_power = std::max(worst_power, p.power_rmse_pct_peak);
+      for (const auto& w : p.flexions) {
+        worst_energy = std::max(worst_energy, WindowEnergyErrorPct(w));
+        worst_eta = std::max(worst_eta, std::fabs(w.eta - w.truth_eta));
+      }
+    }
+  }
+  Print("\nfidelity over the sweep: power RMSE ≤ " + Format("%.2f", worst_power) +
+        "% of peak, window energy within " + Format("%.2f", worst_energy) +
+        "%, η within " + Format("%.2f", worst_eta) + " points\n");
+  json_["fidelity"] = {{"power_rmse_pct_peak", worst_power},
+                       {"window_energy_err_pct", worst_energy},
+                       {"eta_err_pt", worst_eta}};
+
+  const char* quantities[3][3] = {{"fig10_loading", "Loading work", "3:4:5"},
+                                  {"fig11_unloading", "Unloading work", "6:7:8"},
+                                  {"fig12_net", "Net work", "9:10:11"}};
+  for (const auto& q : quantities) {
+    const std::string cols = q[2];
+    const std::string mean = cols.substr(0, cols.find(':'));
+    const std::string rest = cols.substr(cols.find(':') + 1);
+    const std::string se = rest.substr(0, rest.find(':'));
+    const std::string truth = rest.substr(rest.find(':') + 1);
+    std::string plot = "plot ";
+    for (std::size_t i = 0; i < sweeps.size(); ++i) {
+      const std::string sel = "(strcol(1) eq '" + sweeps[i].subject + "' ? $";
+      plot += std::string(i ? ", " : "") +
+              "'amplitude_sweep.csv' every ::1 using 2:" + sel + mean + " : 1/0):" + sel +
+              se + " : 1/0) with yerrorlines lw 2 lc " + std::to_string(i + 1) +
+              " title '" + sweeps[i].subject + " board', '' every ::1 using 2:" + sel +
+              truth + " : 1/0) with points pt 6 ps 1.5 lc " + std::to_string(i + 1) +
+              " title '" + sweeps[i].subject + " truth'";
+    }
+    Figure(q[0], std::string("set title '") + q[1] +
+                     " per flexion vs amplitude'\nset xlabel 'amplitude (deg)'\n"
+                     "set ylabel 'work (mJ)'\nset datafile separator ','\n" +
+                     plot + "\n");
+  }
+}
+
+int Report::Finish(double wall_s, double simulated_s) {
+  json_["run"] = {{"wall_s", wall_s},
+                  {"simulated_s", simulated_s},
+                  {"realtime_factor", wall_s > 0 ? simulated_s / wall_s : 0.0},
+                  {"figures", figures_}};
+  std::ofstream(out_ / "results.json") << json_.dump(2) << '\n';
+  std::ofstream(out_ / "tables.md")
+      << "# Interface power on the simulated Maestro joint\n"
+      << tables_;
+  Print("\nsimulated " + Format("%.1f", simulated_s) + " s in " + Format("%.1f", wall_s) +
+        " s wall (" + Format("%.0f", wall_s > 0 ? simulated_s / wall_s : 0.0) +
+        "× real time)\noutputs in " + out_.string() +
+        ": tables.md, results.json, *.csv, " + std::to_string(figures_.size()) +
+        " figures (*.png)\n");
+  return failed_figures_;
+}
+
+int Run(const std::string& scenario, const plant::PlantParams& robot,
+        const std::vector<plant::PlantParams>& subjects, std::uint64_t seed,
+        Report& report) {
+  const auto start = std::chrono::steady_clock::now();
+  sim::SimBoard board(robot, sim::DefaultBoardConfig());
+  report.Progress("calibration sweep on the robot alone", 0.0);
+  SweepConfig sweep;
+  sweep.start_amplitude = Angle{};
+  sweep.end_amplitude = Angle::Quantize(30.0 * kPi / 180.0);
+  sweep.frequency = Frequency::FromDouble(0.5);
+  sweep.repetitions = 10;
+  sweep.rest_ms = 500;
+  const sim::CalibrationOutcome cal = sim::RunCalibration(board, sweep);
+  report.Calibration(cal);
+  if (!cal.uploaded) {
+    std::fprintf(stderr, "mjc-paper: calibration failed: %s\n", cal.message.c_str());
+    return 2;
+  }
+  const bool all = scenario == "all";
+  const double amplitude = 25.0;
+  if (subjects.empty() && scenario != "calibration") {
+    throw std::runtime_error("no subject parameter sets given");
+  }
+  if (all || scenario == "repeatability") {
+    board.plant().SetInterface(subjects.front().interface);
+    const sim::TrialOutcome one = sim::RunTrial(board, sim::PaperSine(amplitude), true);
+    report.Trial(one, amplitude);
+    const sim::RepeatabilityOutcome rep = sim::RunRepeatability(
+        board, subjects.front(), amplitude, seed,
+        [&report](const std::string& s, double f) { report.Progress(s, f); }, 0.1,
+        all ? 0.3 : 1.0);
+    report.Repeatability(rep, amplitude);
+  }
+  if (all || scenario == "amplitude") {
+    const std::vector<double> amplitudes = {6, 8, 11, 15, 20, 25};
+    std::vector<sim::SubjectSweep> sweeps;
+    const double from = all ? 0.3 : 0.1;
+    for (std::size_t i = 0; i < subjects.size(); ++i) {
+      const auto n = static_cast<double>(subjects.size());
+      const double a = from + (1.0 - from) * static_cast<double>(i) / n;
+      const double b = from + (1.0 - from) * static_cast<double>(i + 1) / n;
+      sweeps.push_back(sim::RunAmplitudeSweep(
+          board, subjects[i], amplitudes,
+          [&report](const std::string& s, double f) { report.Progress(s, f); }, a, b));
+    }
+    report.Amplitude(sweeps);
+  }
+  report.Progress("done", 1.0);
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report.Finish(wall, board.plant().truth().time_s) == 0 ? 0 : 3;
+}
+
+}  // namespace mjc::paper

@@ -1,0 +1,469 @@
+// Parameter sets: JSON in and out, range checks, re-donning.
+#include "mjc/plant/params.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <initializer_list>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "mjc/plant/plant.h"
+
+#ifndef MJC_PARAMS_DIR
+#error "MJC_PARAMS_DIR must name the directory of the parameter sets"
+#endif
+
+namespace mjc::plant {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+std::string Quote(std::string_view s) { return "'" + std::string(s) + "'"; }
+
+[[noreturn]] void FieldError(std::string_view source, std::string_view field,
+                             const std::string& what) {
+  throw std::runtime_error(std::string(source) + ": field " + Quote(field) + " " + what);
+}
+
+std::string Number(double v) {
+  std::ostringstream out;
+  out.precision(17);
+  out << v;
+  return out.str();
+}
+
+// ---------------------------------------------------------------------------------------
+// Reading
+// ---------------------------------------------------------------------------------------
+
+class Reader {
+ public:
+  explicit Reader(std::string_view source) : source_(source) {}
+
+  // The object `key` of `parent` (prefix names the parent for messages); every key of
+  // it must be in `known`.
+  const Json& Section(const Json& parent, std::string_view key,
+                      std::initializer_list<std::string_view> known) const {
+    const Json& section = Get(parent, "", key);
+    if (!section.is_object()) FieldError(source_, key, "must be an object");
+    CheckKnown(section, std::string(key) + ".", known);
+    return section;
+  }
+
+  void CheckKnown(const Json& object, const std::string& prefix,
+                  std::initializer_list<std::string_view> known) const {
+    for (const auto& item : object.items()) {
+      if (std::find(known.begin(), known.end(), item.key()) == known.end()) {
+        FieldError(source_, prefix + item.key(), "is unknown (misspelt?)");
+      }
+    }
+  }
+
+  double Double(const Json& section, std::string_view prefix,
+                std::string_view key) const {
+    const Json& v = Get(section, prefix, key);
+    if (!v.is_number()) FieldError(source_, Name(prefix, key), "must be a number");
+    return v.get<double>();
+  }
+
+  std::int64_t Integer(const Json& section, std::string_view prefix, std::string_view key,
+                       std::int64_t lo, std::int64_t hi) const {
+    const Json& v = Get(section, prefix, key);
+    if (!v.is_number_integer()) {
+      FieldError(source_, Name(prefix, key), "must be an integer");
+    }
+    const std::string range =
+        " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    if (v.is_number_unsigned() &&
+        v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi)) {
+      FieldError(source_, Name(prefix, key),
+                 "= " + std::to_string(v.get<std::uint64_t>()) + range);
+    }
+    const auto value = v.get<std::int64_t>();
+    if (value < lo || value > hi) {
+      FieldError(source_, Name(prefix, key), "= " + std::to_string(value) + range);
+    }
+    return value;
+  }
+
+  std::uint64_t Unsigned64(const Json& section, std::string_view prefix,
+                           std::string_view key) const {
+    const Json& v = Get(section, prefix, key);
+    if (!v.is_number_unsigned()) {
+      FieldError(source_, Name(prefix, key), "must be a non-negative integer");
+    }
+    return v.get<std::uint64_t>();
+  }
+
+  bool Bool(const Json& section, std::string_view prefix, std::string_view key) const {
+    const Json& v = Get(section, prefix, key);
+    if (!v.is_boolean()) FieldError(source_, Name(prefix, key), "must be true or false");
+    return v.get<bool>();
+  }
+
+  std::string String(const Json& section, std::string_view prefix,
+                     std::string_view key) const {
+    const Json& v = Get(section, prefix, key);
+    if (!v.is_string()) FieldError(source_, Name(prefix, key), "must be a string");
+    return v.get<std::string>();
+  }
+
+ private:
+  static std::string Name(std::string_view prefix, std::string_view key) {
+    return prefix.empty() ? std::string(key)
+                          : std::string(prefix) + "." + std::string(key);
+  }
+
+  const Json& Get(const Json& object, std::string_view prefix,
+                  std::string_view key) const {
+    const auto it = object.find(key);
+    if (it == object.end()) FieldError(source_, Name(prefix, key), "is missing");
+    return *it;
+  }
+
+  std::string_view source_;
+};
+
+const char* ModelName(InterfaceModel model) {
+  return model == InterfaceModel::kKelvinVoigt ? "kelvin_voigt" : "standard_linear_solid";
+}
+
+// ---------------------------------------------------------------------------------------
+// Validation
+// ---------------------------------------------------------------------------------------
+
+class Checker {
+ public:
+  explicit Checker(std::string_view source) : source_(source) {}
+
+  // v in [lo, hi] (or (lo, hi] with open_low), finite.
+  void Range(double v, std::string_view field, double lo, double hi,
+             bool open_low = false) const {
+    const bool ok = std::isfinite(v) && (open_low ? v > lo : v >= lo) && v <= hi;
+    if (!ok) {
+      FieldError(source_, field,
+                 "= " + Number(v) + " is outside " + (open_low ? "(" : "[") + Number(lo) +
+                     ", " + Number(hi) + "]");
+    }
+  }
+
+ private:
+  std::string_view source_;
+};
+
+double Clip3(double g) { return std::clamp(g, -3.0, 3.0); }
+
+}  // namespace
+
+void ValidatePlantParams(const PlantParams& p, std::string_view source) {
+  const Checker c(source);
+  const MotorParams& m = p.motor;
+  c.Range(m.supply_V, "motor.supply_V", 0.0, 60.0, true);
+  c.Range(m.resistance_ohm, "motor.resistance_ohm", 0.1, 1000.0);
+  c.Range(m.inductance_H, "motor.inductance_H", 1e-6, 0.1);
+  c.Range(m.torque_constant_Nm_per_A, "motor.torque_constant_Nm_per_A", 1e-4, 1.0);
+  c.Range(m.rotor_inertia_kg_m2, "motor.rotor_inertia_kg_m2", 1e-9, 1e-3);
+  c.Range(m.viscous_Nm_s_per_rad, "motor.viscous_Nm_s_per_rad", 0.0, 1e-3);
+  c.Range(m.coulomb_Nm, "motor.coulomb_Nm", 0.0, 0.1);
+  c.Range(m.coulomb_speed_rad_s, "motor.coulomb_speed_rad_s", 0.0, 1000.0, true);
+  c.Range(m.gear_ratio, "motor.gear_ratio", 1.0, 1e4);
+  c.Range(m.output_inertia_kg_m2, "motor.output_inertia_kg_m2", 0.0, 1e-2);
+
+  const CableParams& k = p.cable;
+  c.Range(k.alpha, "cable.alpha", 0.0, 8.0, true);
+  if (!(k.alpha < 8.0)) FieldError(source, "cable.alpha", "must be below 8");
+  c.Range(k.c_right_rad, "cable.c_right_rad", -0.5, 0.5);
+  c.Range(k.c_left_rad, "cable.c_left_rad", -0.5, 0.5);
+  if (k.c_left_rad > k.c_right_rad) {
+    FieldError(source, "cable.c_left_rad",
+               "= " + Number(k.c_left_rad) + " is above cable.c_right_rad = " +
+                   Number(k.c_right_rad) + " (the dead band needs c_l <= c_r)");
+  }
+  c.Range(k.contact_stiffness_Nm_per_rad, "cable.contact_stiffness_Nm_per_rad", 1.0, 1e6);
+  c.Range(k.contact_damping_Nm_s_per_rad, "cable.contact_damping_Nm_s_per_rad", 0.0,
+          10.0);
+  c.Range(k.contact_damping_ramp_rad, "cable.contact_damping_ramp_rad", 0.0, 0.01, true);
+  c.Range(k.coulomb_Nm, "cable.coulomb_Nm", 0.0, 10.0);
+  c.Range(k.bristle_stiffness_Nm_per_rad, "cable.bristle_stiffness_Nm_per_rad", 1.0, 1e6);
+  c.Range(k.viscous_Nm_s_per_rad, "cable.viscous_Nm_s_per_rad", 0.0, 10.0);
+  c.Range(k.inertia_kg_m2, "cable.inertia_kg_m2", 1e-9, 1e-2);
+
+  c.Range(p.sea.spring_rate_N_per_m, "sea.spring_rate_N_per_m", 0.0, 1e6, true);
+  c.Range(p.sea.joint_pulley_radius_m, "sea.joint_pulley_radius_m", 0.0, 0.1, true);
+  c.Range(p.joint.inertia_kg_m2, "joint.inertia_kg_m2", 1e-8, 0.1);
+  c.Range(p.joint.viscous_Nm_s_per_rad, "joint.viscous_Nm_s_per_rad", 0.0, 10.0);
+
+  const InterfaceParams& ip = p.interface;
+  if (ip.model != InterfaceModel::kKelvinVoigt &&
+      ip.model != InterfaceModel::kStandardLinearSolid) {
+    FieldError(source, "interface.model", "is not a known model");
+  }
+  c.Range(ip.stiffness_Nm_per_rad, "interface.stiffness_Nm_per_rad", 0.0, 1000.0);
+  c.Range(ip.damping_Nm_s_per_rad, "interface.damping_Nm_s_per_rad", 0.0, 100.0);
+  c.Range(ip.maxwell_stiffness_Nm_per_rad, "interface.maxwell_stiffness_Nm_per_rad", 0.0,
+          1000.0);
+  c.Range(ip.preload_Nm, "interface.preload_Nm", -1.0, 1.0);
+
+  const SensorParams& s = p.sensors;
+  if (s.motor_counts_per_rev < 1 || s.motor_counts_per_rev > (1 << 20)) {
+    FieldError(
+        source, "sensors.motor_counts_per_rev",
+        "= " + std::to_string(s.motor_counts_per_rev) + " is outside [1, 1048576]");
+  }
+  c.Range(s.motor_noise_counts, "sensors.motor_noise_counts", 0.0, 100.0);
+  if (s.joint_zero_count > 16383) {
+    FieldError(source, "sensors.joint_zero_count",
+               "= " + std::to_string(s.joint_zero_count) + " is outside [0, 16383]");
+  }
+  c.Range(s.joint_noise_counts, "sensors.joint_noise_counts", 0.0, 100.0);
+  c.Range(p.integration.max_step_s, "integration.max_step_s", 1e-7, 1e-3);
+
+  // The fastest mode must sit well inside RK4's stability region (|λ·h| < 2.78 on the
+  // real axis, 2.83 on the imaginary): |λ| of a body of inertia J on stiffness k with
+  // damping b is at most max(√(k/J), b/J).
+  const double k_sea = p.sea.Stiffness();
+  const double j_eff =
+      m.rotor_inertia_kg_m2 * m.gear_ratio * m.gear_ratio + m.output_inertia_kg_m2;
+  const double k_if =
+      ip.present ? ip.stiffness_Nm_per_rad + ip.maxwell_stiffness_Nm_per_rad : 0.0;
+  const double b_if = ip.present && ip.model == InterfaceModel::kKelvinVoigt
+                          ? ip.damping_Nm_s_per_rad
+                          : 0.0;
+  struct Mode {
+    const char* what;
+    double rate;
+  };
+  const double k_cable =
+      2.0 * k.contact_stiffness_Nm_per_rad + k.bristle_stiffness_Nm_per_rad + k_sea;
+  const Mode modes[] = {
+      {"motor electrical pole R/L", m.resistance_ohm / m.inductance_H},
+      {"cable side on contact and bristle",
+       std::max(
+           std::sqrt(k_cable / k.inertia_kg_m2),
+           (k.contact_damping_Nm_s_per_rad + k.viscous_Nm_s_per_rad) / k.inertia_kg_m2)},
+      {"rotor on the contact and its friction",
+       std::max(std::sqrt(k.contact_stiffness_Nm_per_rad * k.alpha * k.alpha / j_eff),
+                (m.coulomb_Nm / m.coulomb_speed_rad_s + m.viscous_Nm_s_per_rad) *
+                    m.gear_ratio * m.gear_ratio / j_eff)},
+      {"joint on springs and interface",
+       std::max(std::sqrt((k_sea + k_if) / p.joint.inertia_kg_m2),
+                (p.joint.viscous_Nm_s_per_rad + b_if) / p.joint.inertia_kg_m2)},
+      {"interface Maxwell arm k_2/b",
+       ip.present && ip.model == InterfaceModel::kStandardLinearSolid &&
+               ip.damping_Nm_s_per_rad > 0.0
+           ? ip.maxwell_stiffness_Nm_per_rad / ip.damping_Nm_s_per_rad
+           : 0.0},
+  };
+  for (const Mode& mode : modes) {
+    if (mode.rate * p.integration.max_step_s > 2.0) {
+      FieldError(source, "integration.max_step_s",
+                 "= " + Number(p.integration.max_step_s) + " s is too long for the " +
+                     mode.what + " (" + Number(mode.rate) + " 1/s): it must be at most " +
+                     Number(2.0 / mode.rate) + " s");
+    }
+  }
+}
+
+PlantParams ParsePlantParams(std::string_view json_text, std::string_view source) {
+  Json root;
+  try {
+    root = Json::parse(json_text);
+  } catch (const Json::parse_error& e) {
+    throw std::runtime_error(std::string(source) + ": not valid JSON: " + e.what());
+  }
+  if (!root.is_object()) {
+    throw std::runtime_error(std::string(source) + ": the top level must be an object");
+  }
+  const Reader r(source);
+  r.CheckKnown(root, "",
+               {"name", "description", "motor", "cable", "sea", "joint", "interface",
+                "sensors", "integration"});
+  PlantParams p;
+  p.name = r.String(root, "", "name");
+  p.description = root.contains("description") ? r.String(root, "", "description") : "";
+
+  const Json& m =
+      r.Section(root, "motor",
+                {"supply_V", "resistance_ohm", "inductance_H", "torque_constant_Nm_per_A",
+                 "rotor_inertia_kg_m2", "viscous_Nm_s_per_rad", "coulomb_Nm",
+                 "coulomb_speed_rad_s", "gear_ratio", "output_inertia_kg_m2"});
+  p.motor.supply_V = r.Double(m, "motor", "supply_V");
+  p.motor.resistance_ohm = r.Double(m, "motor", "resistance_ohm");
+  p.motor.inductance_H = r.Double(m, "motor", "inductance_H");
+  p.motor.torque_constant_Nm_per_A = r.Double(m, "motor", "torque_constant_Nm_per_A");
+  p.motor.rotor_inertia_kg_m2 = r.Double(m, "motor", "rotor_inertia_kg_m2");
+  p.motor.viscous_Nm_s_per_rad = r.Double(m, "motor", "viscous_Nm_s_per_rad");
+  p.motor.coulomb_Nm = r.Double(m, "motor", "coulomb_Nm");
+  p.motor.coulomb_speed_rad_s = r.Double(m, "motor", "coulomb_speed_rad_s");
+  p.motor.gear_ratio = r.Double(m, "motor", "gear_ratio");
+  p.motor.output_inertia_kg_m2 = r.Double(m, "motor", "output_inertia_kg_m2");
+
+  const Json& k = r.Section(
+      root, "cable",
+      {"alpha", "c_right_rad", "c_left_rad", "contact_stiffness_Nm_per_rad",
+       "contact_damping_Nm_s_per_rad", "contact_damping_ramp_rad", "coulomb_Nm",
+       "bristle_stiffness_Nm_per_rad", "viscous_Nm_s_per_rad", "inertia_kg_m2"});
+  p.cable.alpha = r.Double(k, "cable", "alpha");
+  p.cable.c_right_rad = r.Double(k, "cable", "c_right_rad");
+  p.cable.c_left_rad = r.Double(k, "cable", "c_left_rad");
+  p.cable.contact_stiffness_Nm_per_rad =
+      r.Double(k, "cable", "contact_stiffness_Nm_per_rad");
+  p.cable.contact_damping_Nm_s_per_rad =
+      r.Double(k, "cable", "contact_damping_Nm_s_per_rad");
+  p.cable.contact_damping_ramp_rad = r.Double(k, "cable", "contact_damping_ramp_rad");
+  p.cable.coulomb_Nm = r.Double(k, "cable", "coulomb_Nm");
+  p.cable.bristle_stiffness_Nm_per_rad =
+      r.Double(k, "cable", "bristle_stiffness_Nm_per_rad");
+  p.cable.viscous_Nm_s_per_rad = r.Double(k, "cable", "viscous_Nm_s_per_rad");
+  p.cable.inertia_kg_m2 = r.Double(k, "cable", "inertia_kg_m2");
+
+  const Json& s =
+      r.Section(root, "sea", {"spring_rate_N_per_m", "joint_pulley_radius_m"});
+  p.sea.spring_rate_N_per_m = r.Double(s, "sea", "spring_rate_N_per_m");
+  p.sea.joint_pulley_radius_m = r.Double(s, "sea", "joint_pulley_radius_m");
+
+  const Json& j = r.Section(root, "joint", {"inertia_kg_m2", "viscous_Nm_s_per_rad"});
+  p.joint.inertia_kg_m2 = r.Double(j, "joint", "inertia_kg_m2");
+  p.joint.viscous_Nm_s_per_rad = r.Double(j, "joint", "viscous_Nm_s_per_rad");
+
+  const Json& i =
+      r.Section(root, "interface",
+                {"present", "model", "stiffness_Nm_per_rad", "damping_Nm_s_per_rad",
+                 "maxwell_stiffness_Nm_per_rad", "preload_Nm"});
+  p.interface.present = r.Bool(i, "interface", "present");
+  const std::string model = r.String(i, "interface", "model");
+  if (model == "kelvin_voigt") {
+    p.interface.model = InterfaceModel::kKelvinVoigt;
+  } else if (model == "standard_linear_solid") {
+    p.interface.model = InterfaceModel::kStandardLinearSolid;
+  } else {
+    FieldError(
+        source, "interface.model",
+        "= \"" + model + "\" is not \"kelvin_voigt\" or \"standard_linear_solid\"");
+  }
+  p.interface.stiffness_Nm_per_rad = r.Double(i, "interface", "stiffness_Nm_per_rad");
+  p.interface.damping_Nm_s_per_rad = r.Double(i, "interface", "damping_Nm_s_per_rad");
+  p.interface.maxwell_stiffness_Nm_per_rad =
+      r.Double(i, "interface", "maxwell_stiffness_Nm_per_rad");
+  p.interface.preload_Nm = r.Double(i, "interface", "preload_Nm");
+
+  const Json& n =
+      r.Section(root, "sensors",
+                {"motor_counts_per_rev", "motor_count_at_zero", "motor_noise_counts",
+                 "joint_zero_count", "joint_noise_counts", "noise_seed"});
+  p.sensors.motor_counts_per_rev = static_cast<std::int32_t>(
+      r.Integer(n, "sensors", "motor_counts_per_rev", 1, 1 << 20));
+  p.sensors.motor_count_at_zero = static_cast<std::uint16_t>(
+      r.Integer(n, "sensors", "motor_count_at_zero", 0, 65535));
+  p.sensors.motor_noise_counts = r.Double(n, "sensors", "motor_noise_counts");
+  p.sensors.joint_zero_count =
+      static_cast<std::uint16_t>(r.Integer(n, "sensors", "joint_zero_count", 0, 16383));
+  p.sensors.joint_noise_counts = r.Double(n, "sensors", "joint_noise_counts");
+  p.sensors.noise_seed = r.Unsigned64(n, "sensors", "noise_seed");
+
+  const Json& g = r.Section(root, "integration", {"max_step_s"});
+  p.integration.max_step_s = r.Double(g, "integration", "max_step_s");
+
+  ValidatePlantParams(p, source);
+  return p;
+}
+
+PlantParams LoadPlantParamsFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open the parameter file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw std::runtime_error(path + ": read error");
+  return ParsePlantParams(text.str(), path);
+}
+
+PlantParams LoadPlantParams(std::string_view name) {
+  const bool valid = !name.empty() && std::all_of(name.begin(), name.end(), [](char ch) {
+    return (ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_' || ch == '-';
+  });
+  if (!valid) {
+    throw std::runtime_error("parameter set name " + Quote(name) +
+                             " is not [a-z0-9_-]+ (use LoadPlantParamsFile for a path)");
+  }
+  return LoadPlantParamsFile(std::string(MJC_PARAMS_DIR) + "/" + std::string(name) +
+                             ".json");
+}
+
+std::string PlantParamsToJson(const PlantParams& p) {
+  Json root;
+  root["name"] = p.name;
+  root["description"] = p.description;
+  root["motor"] = {{"supply_V", p.motor.supply_V},
+                   {"resistance_ohm", p.motor.resistance_ohm},
+                   {"inductance_H", p.motor.inductance_H},
+                   {"torque_constant_Nm_per_A", p.motor.torque_constant_Nm_per_A},
+                   {"rotor_inertia_kg_m2", p.motor.rotor_inertia_kg_m2},
+                   {"viscous_Nm_s_per_rad", p.motor.viscous_Nm_s_per_rad},
+                   {"coulomb_Nm", p.motor.coulomb_Nm},
+                   {"coulomb_speed_rad_s", p.motor.coulomb_speed_rad_s},
+                   {"gear_ratio", p.motor.gear_ratio},
+                   {"output_inertia_kg_m2", p.motor.output_inertia_kg_m2}};
+  root["cable"] = {{"alpha", p.cable.alpha},
+                   {"c_right_rad", p.cable.c_right_rad},
+                   {"c_left_rad", p.cable.c_left_rad},
+                   {"contact_stiffness_Nm_per_rad", p.cable.contact_stiffness_Nm_per_rad},
+                   {"contact_damping_Nm_s_per_rad", p.cable.contact_damping_Nm_s_per_rad},
+                   {"contact_damping_ramp_rad", p.cable.contact_damping_ramp_rad},
+                   {"coulomb_Nm", p.cable.coulomb_Nm},
+                   {"bristle_stiffness_Nm_per_rad", p.cable.bristle_stiffness_Nm_per_rad},
+                   {"viscous_Nm_s_per_rad", p.cable.viscous_Nm_s_per_rad},
+                   {"inertia_kg_m2", p.cable.inertia_kg_m2}};
+  root["sea"] = {{"spring_rate_N_per_m", p.sea.spring_rate_N_per_m},
+                 {"joint_pulley_radius_m", p.sea.joint_pulley_radius_m}};
+  root["joint"] = {{"inertia_kg_m2", p.joint.inertia_kg_m2},
+                   {"viscous_Nm_s_per_rad", p.joint.viscous_Nm_s_per_rad}};
+  root["interface"] = {
+      {"present", p.interface.present},
+      {"model", ModelName(p.interface.model)},
+      {"stiffness_Nm_per_rad", p.interface.stiffness_Nm_per_rad},
+      {"damping_Nm_s_per_rad", p.interface.damping_Nm_s_per_rad},
+      {"maxwell_stiffness_Nm_per_rad", p.interface.maxwell_stiffness_Nm_per_rad},
+      {"preload_Nm", p.interface.preload_Nm}};
+  root["sensors"] = {{"motor_counts_per_rev", p.sensors.motor_counts_per_rev},
+                     {"motor_count_at_zero", p.sensors.motor_count_at_zero},
+                     {"motor_noise_counts", p.sensors.motor_noise_counts},
+                     {"joint_zero_count", p.sensors.joint_zero_count},
+                     {"joint_noise_counts", p.sensors.joint_noise_counts},
+                     {"noise_seed", p.sensors.noise_seed}};
+  root["integration"] = {{"max_step_s", p.integration.max_step_s}};
+  return root.dump(2) + "\n";
+}
+
+PlantParams Redon(const PlantParams& params, std::uint64_t seed) {
+  // Spreads (log-normal σ) chosen so the shipped subjects' η varies between re-donnings
+  // about as much as Table I of the paper (3 points std overall); params/README.md.
+  constexpr double kStiffnessSigma = 0.07;
+  constexpr double kDampingSigma = 0.085;
+  constexpr double kPreloadSigma = 0.25;
+  std::mt19937_64 rng(seed);
+  bool has_spare = false;
+  double spare = 0.0;
+  const double g_stiffness = Clip3(StandardNormal(&rng, &has_spare, &spare));
+  const double g_damping = Clip3(StandardNormal(&rng, &has_spare, &spare));
+  const double g_preload = Clip3(StandardNormal(&rng, &has_spare, &spare));
+  PlantParams p = params;
+  const double stiffness_factor = std::exp(kStiffnessSigma * g_stiffness);
+  p.interface.stiffness_Nm_per_rad *= stiffness_factor;
+  p.interface.maxwell_stiffness_Nm_per_rad *= stiffness_factor;
+  p.interface.damping_Nm_s_per_rad *= std::exp(kDampingSigma * g_damping);
+  p.interface.preload_Nm =
+      std::clamp(p.interface.preload_Nm * std::exp(kPreloadSigma * g_preload), -1.0, 1.0);
+  p.interface.stiffness_Nm_per_rad = std::min(p.interface.stiffness_Nm_per_rad, 1000.0);
+  p.interface.maxwell_stiffness_Nm_per_rad =
+      std::min(p.interface.maxwell_stiffness_Nm_per_rad, 1000.0);
+  p.interface.damping_Nm_s_per_rad = std::min(p.interface.damping_Nm_s_per_rad, 100.0);
+  p.name = params.name + "+redon" + std::to_string(seed);
+  return p;
+}
+
+}  // namespace mjc::plant

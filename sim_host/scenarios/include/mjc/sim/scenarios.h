@@ -1,0 +1,121 @@
+// The paper's experiments (design.md §5) on the simulated board: the calibration sweep
+// and fit, single trials with plant ground truth, the repeatability study (Table I,
+// Fig. 9) and the amplitude sweep (Figs. 10–12, Tables II–III). "Board" numbers are
+// what the unmodified firmware estimated from its sensors; "truth" numbers are the
+// plant's interface power and energy over the same windows, which the firmware never
+// sees (the paper's "simulation" column).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "mjc/host/calibration_fit.h"
+#include "mjc/host/report.h"
+#include "mjc/plant/params.h"
+#include "mjc/sim/sim_board.h"
+
+namespace mjc::sim {
+
+// The board's configuration for the Maestro joint plant: default signal chain, and
+// position-loop gains tuned on the plant (see DefaultBoardConfig in scenarios.cc).
+ControlConfig DefaultBoardConfig();
+
+// Called with a stage name and the fraction done of the whole run, [0, 1].
+using ProgressFn = std::function<void(const std::string& stage, double fraction)>;
+
+struct CalibrationOutcome {
+  host::BacklashFit fit;
+  double true_c_right_rad = 0;
+  double true_c_left_rad = 0;
+  double error_right_deg = 0;  // fitted − true
+  double error_left_deg = 0;
+  bool uploaded = false;  // accepted by ToFirmwareConfig and by the board
+  std::string message;
+  // θ_m, θ_j as the board measured them, every 10th tick (Fig. 7).
+  std::vector<double> motor_rad;
+  std::vector<double> joint_rad;
+};
+
+// Runs the increasing-amplitude sweep on the robot alone (the plant must have no
+// interface), fits c_r, c_l with NLopt on the board's own θ_m, θ_j, uploads the
+// calibration and waits for the board to accept it.
+CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep);
+
+struct WindowOutcome {
+  Motion motion = Motion::kFlexion;
+  std::uint16_t repetition = 0;
+  // Board estimate (J, %).
+  double load = 0, unload = 0, net = 0, eta = 0;
+  // Plant ground truth over the same ticks.
+  double truth_load = 0, truth_unload = 0, truth_net = 0, truth_eta = 0;
+  // Power over the window, resampled to kProfilePoints (W), board and truth (Fig. 9).
+  std::vector<double> profile;
+  std::vector<double> truth_profile;
+  double peak_fraction = 0;  // where the commanded peak falls in the window, [0, 1]
+};
+
+struct TraceRow {
+  double t, setpoint, motor, joint, torque, power, truth_power;
+};
+
+struct TrialOutcome {
+  std::vector<WindowOutcome> windows;  // every completed window, in order
+  std::vector<TraceRow> trace;         // every 20th tick (500 Hz), when requested
+  double power_rmse_W = 0;             // board vs truth power, aligned, over the cycles
+  double truth_peak_power_W = 0;       // max |truth power| over the cycles
+  std::uint32_t ticks = 0;
+  bool faulted = false;
+  std::string fault;
+};
+
+inline constexpr int kProfilePoints = 100;
+
+// One sine trial to completion on a calibrated, idle board.
+TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace);
+
+// The flexion windows of the paper's analysed repetitions (the middle three of five).
+std::vector<const WindowOutcome*> AnalysedFlexions(const TrialOutcome& trial,
+                                                   std::uint16_t repetitions);
+
+SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions = 5);
+
+struct RepeatabilityOutcome {
+  std::vector<TrialOutcome> trials;
+  std::vector<host::Stats> eta;        // board, per trial (middle three flexions)
+  std::vector<host::Stats> truth_eta;  // truth, per trial
+  host::Stats overall;                 // board, all analysed flexions
+  host::Stats truth_overall;
+};
+
+// Five trials of five repetitions at `amplitude_deg`, the interface re-donned (a seeded
+// perturbation of `subject`) before each.
+RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams& subject,
+                                      double amplitude_deg, std::uint64_t seed,
+                                      const ProgressFn& progress, double progress_from,
+                                      double progress_to);
+
+struct AmplitudePoint {
+  double amplitude_deg = 0;
+  host::Stats load, unload, net, eta;                          // board
+  host::Stats truth_load, truth_unload, truth_net, truth_eta;  // truth
+  double power_rmse_pct_peak = 0;
+  std::vector<WindowOutcome> flexions;  // the analysed ones
+};
+
+struct SubjectSweep {
+  std::string subject;
+  std::vector<AmplitudePoint> points;
+  // RMSE board vs truth across amplitudes (J), and normalised to the truth's range (%).
+  double rmse_load = 0, rmse_unload = 0, rmse_net = 0;
+  double nrmse_load = 0, nrmse_unload = 0, nrmse_net = 0;
+};
+
+// The amplitude sweep for one subject: each amplitude a five-repetition trial.
+SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subject,
+                               const std::vector<double>& amplitudes_deg,
+                               const ProgressFn& progress, double progress_from,
+                               double progress_to);
+
+}  // namespace mjc::sim

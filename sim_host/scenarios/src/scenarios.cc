@@ -1,0 +1,314 @@
+#include "mjc/sim/scenarios.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace mjc::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Ticks the board keeps running after a trial ends, so that windows still inside the
+// estimator's delay line complete.
+std::uint32_t FlushTicks(const SimBoard& board) {
+  return static_cast<std::uint32_t>(board.tick_hz() / 10);  // 100 ms > any delay
+}
+
+std::vector<double> Resample(const std::vector<double>& values, std::size_t begin,
+                             std::size_t end) {
+  std::vector<double> out(kProfilePoints, 0.0);
+  if (end <= begin + 1) return out;
+  for (int i = 0; i < kProfilePoints; ++i) {
+    const double span = static_cast<double>(end - 1 - begin);
+    const double x = static_cast<double>(begin) + span * (i / double{kProfilePoints - 1});
+    const auto k = static_cast<std::size_t>(x);
+    const double f = x - static_cast<double>(k);
+    const double a = values[k];
+    const double b = values[std::min(k + 1, end - 1)];
+    out[static_cast<std::size_t>(i)] = a + f * (b - a);
+  }
+  return out;
+}
+
+double EtaPercent(double load, double unload) {
+  return load > 0 ? (1.0 - std::fabs(unload) / load) * 100.0 : 0.0;
+}
+
+std::string FaultName(Fault f) { return "fault " + std::to_string(static_cast<int>(f)); }
+
+}  // namespace
+
+ControlConfig DefaultBoardConfig() {
+  ControlConfig c;
+  // Position-loop gains for the Maestro joint plant (sim_host/params: 13.7 Ω, 11.4
+  // mN·m/A, 100:1, 12 V). kff ≈ k_e·N/V_supply cancels the back-EMF at the commanded
+  // velocity; kp and ki hold the tracking error of a 25° 0.5 Hz sine under the interface
+  // load to well under a degree; kd damps the cable pick-up at the dead-band edges.
+  c.position.kp = Fixed<PerRadian, 16>::FromDouble(40.0);
+  c.position.ki = Fixed<PerRadianSecond, 16>::FromDouble(200.0);
+  c.position.kd = Fixed<SecondPerRadian, 16>::FromDouble(0.05);
+  c.position.kff = Fixed<SecondPerRadian, 16>::FromDouble(0.095);
+  c.position.max_duty = Duty::FromDouble(0.9);
+  c.position.integral_limit = Duty::FromDouble(0.5);
+  return c;
+}
+
+SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions) {
+  SineConfig s;
+  s.amplitude = Angle::Quantize(amplitude_deg * kPi / 180.0);
+  s.frequency = Frequency::FromDouble(0.5);
+  s.repetitions = repetitions;
+  s.rest_ms = 1500;  // back to back: the paper's 3 s between amplitudes
+  return s;
+}
+
+CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
+  CalibrationOutcome out;
+  app::JointApp& app = board.app();
+  const plant::CableParams& cable = board.plant().params().cable;
+  out.true_c_right_rad = cable.c_right_rad;
+  out.true_c_left_rad = cable.c_left_rad;
+  if (app.StartCalibrationSweep(sweep).result != app::CommandResult::kAccepted) {
+    out.message = "the board refused the calibration sweep";
+    return out;
+  }
+  std::vector<double> motor, joint;
+  bool started = false;
+  for (std::uint64_t i = 0; i < 100ull * board.tick_hz() * 60; ++i) {
+    board.Tick();
+    const Telemetry& t = app.last().telemetry;
+    if (app.state() == app::AppState::kCalibrating) started = true;
+    if (started) {
+      motor.push_back(t.motor.ToDouble());
+      joint.push_back(t.joint.ToDouble());
+      if (motor.size() % 10 == 0) {
+        out.motor_rad.push_back(motor.back());
+        out.joint_rad.push_back(joint.back());
+      }
+    }
+    if (app.state() == app::AppState::kFault) {
+      out.message = "the sweep faulted: " + FaultName(app.control().fault());
+      return out;
+    }
+    if (started && app.state() == app::AppState::kIdle) break;
+  }
+  // The joint trails the cable side by a few ms on the robot alone (the SEA spring
+  // against the joint's damping): fit that lag too, or it reads as extra slack.
+  host::BacklashFitOptions options;
+  options.fit_lag = true;
+  options.sample_rate_hz = board.tick_hz();
+  out.fit = host::FitBacklash(motor, joint, options);
+  out.error_right_deg = (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / kPi;
+  out.error_left_deg = (out.fit.c_left_rad - out.true_c_left_rad) * 180.0 / kPi;
+  std::string why;
+  const auto config = host::ToFirmwareConfig(out.fit, &why);
+  if (!config) {
+    out.message = "calibration refused: " + why;
+    return out;
+  }
+  const app::CommandOutcome o = app.SetCalibration(*config);
+  board.Tick();
+  out.uploaded = o.result == app::CommandResult::kAccepted && app.calibrated();
+  out.message = out.uploaded ? "uploaded" : "the board refused the calibration";
+  return out;
+}
+
+TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) {
+  TrialOutcome out;
+  app::JointApp& app = board.app();
+  const app::CommandOutcome o = app.StartTrial(sine);
+  if (o.result != app::CommandResult::kAccepted) {
+    out.faulted = true;
+    out.fault =
+        "trial refused (result " + std::to_string(static_cast<int>(o.result)) + ")";
+    return out;
+  }
+  app::AppEvent event;
+  while (app.PopEvent(&event)) {
+  }
+  const std::uint32_t delay = app.control().delay_ticks();
+  // Truth and board power by board tick, from the trial's first tick.
+  const std::uint32_t base = app.last().telemetry.tick + 1;
+  std::vector<double> truth_energy, truth_power, board_power;
+  struct BoardWindow {
+    WindowSummary w;
+  };
+  std::vector<BoardWindow> windows;
+  bool running = false;
+  std::uint32_t flush = 0;
+  const std::uint64_t limit = static_cast<std::uint64_t>(board.tick_hz()) * 600;
+  for (std::uint64_t i = 0; i < limit; ++i) {
+    const plant::Truth& truth = board.plant().truth();
+    truth_energy.push_back(truth.interface_energy_J);
+    truth_power.push_back(truth.interface_power_W);
+    board.Tick();
+    const TickResult& r = app.last();
+    // The board's power refers to the instant `delay` ticks back.
+    board_power.resize(truth_power.size(), 0.0);
+    if (r.telemetry.tick >= base + delay) {
+      board_power[r.telemetry.tick - delay - base] = r.telemetry.power.ToDouble();
+    }
+    if (keep_trace && i % 20 == 0) {
+      out.trace.push_back({static_cast<double>(i) / board.tick_hz(),
+                           r.telemetry.setpoint.ToDouble(), r.telemetry.motor.ToDouble(),
+                           r.telemetry.joint.ToDouble(), r.telemetry.torque.ToDouble(),
+                           r.telemetry.power.ToDouble(), truth.interface_power_W});
+    }
+    while (app.PopEvent(&event)) {
+      if (event.kind == app::AppEvent::Kind::kWindow) windows.push_back({event.window});
+      if (event.kind == app::AppEvent::Kind::kFault) {
+        out.faulted = true;
+        out.fault = FaultName(event.fault);
+      }
+    }
+    if (app.state() == app::AppState::kRunning) running = true;
+    if (out.faulted) break;
+    if (running && app.state() == app::AppState::kIdle && ++flush > FlushTicks(board))
+      break;
+  }
+  out.ticks = static_cast<std::uint32_t>(truth_power.size());
+
+  // Windows against truth over the same ticks; power error over the cycles.
+  std::size_t first = truth_power.size(), last = 0;
+  for (const BoardWindow& bw : windows) {
+    const WindowSummary& w = bw.w;
+    if (w.start_tick < base || w.end_tick - base > truth_energy.size()) continue;
+    const std::size_t s = w.start_tick - base, p = w.peak_tick - base,
+                      e = w.end_tick - base;
+    if (e >= truth_energy.size()) continue;
+    WindowOutcome wo;
+    wo.motion = w.motion;
+    wo.repetition = w.repetition;
+    wo.load = w.loading.ToDouble();
+    wo.unload = w.unloading.ToDouble();
+    wo.net = w.net.ToDouble();
+    wo.eta = w.eta_percent.ToDouble();
+    wo.truth_load = truth_energy[p] - truth_energy[s];
+    wo.truth_unload = truth_energy[e] - truth_energy[p];
+    wo.truth_net = truth_energy[e] - truth_energy[s];
+    wo.truth_eta = EtaPercent(wo.truth_load, wo.truth_unload);
+    wo.profile = Resample(board_power, s, e);
+    wo.truth_profile = Resample(truth_power, s, e);
+    wo.peak_fraction = static_cast<double>(p - s) / static_cast<double>(e - s);
+    out.windows.push_back(std::move(wo));
+    first = std::min(first, s);
+    last = std::max(last, e);
+  }
+  if (last > first) {
+    double ss = 0, peak = 0;
+    for (std::size_t k = first; k < last; ++k) {
+      const double d = board_power[k] - truth_power[k];
+      ss += d * d;
+      peak = std::max(peak, std::fabs(truth_power[k]));
+    }
+    out.power_rmse_W = std::sqrt(ss / static_cast<double>(last - first));
+    out.truth_peak_power_W = peak;
+  }
+  return out;
+}
+
+std::vector<const WindowOutcome*> AnalysedFlexions(const TrialOutcome& trial,
+                                                   std::uint16_t repetitions) {
+  const RepetitionRange keep = MiddleRepetitions(repetitions, 3);
+  std::vector<const WindowOutcome*> out;
+  for (const WindowOutcome& w : trial.windows) {
+    if (w.motion == Motion::kFlexion && keep.Contains(w.repetition)) out.push_back(&w);
+  }
+  return out;
+}
+
+RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams& subject,
+                                      double amplitude_deg, std::uint64_t seed,
+                                      const ProgressFn& progress, double progress_from,
+                                      double progress_to) {
+  RepeatabilityOutcome out;
+  std::vector<double> all, all_truth;
+  const int kTrials = 5;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    if (progress) {
+      progress("repeatability: trial " + std::to_string(trial + 1) + "/5",
+               progress_from + (progress_to - progress_from) * trial / kTrials);
+    }
+    // Re-don: a new seeded perturbation of the subject's interface.
+    board.plant().SetInterface(
+        plant::Redon(subject, seed + static_cast<std::uint64_t>(trial)).interface);
+    TrialOutcome t = RunTrial(board, PaperSine(amplitude_deg), trial == 0);
+    std::vector<double> eta, truth_eta;
+    for (const WindowOutcome* w : AnalysedFlexions(t, 5)) {
+      eta.push_back(w->eta);
+      truth_eta.push_back(w->truth_eta);
+      all.push_back(w->eta);
+      all_truth.push_back(w->truth_eta);
+    }
+    out.eta.push_back(host::Describe(eta));
+    out.truth_eta.push_back(host::Describe(truth_eta));
+    out.trials.push_back(std::move(t));
+  }
+  out.overall = host::Describe(all);
+  out.truth_overall = host::Describe(all_truth);
+  return out;
+}
+
+SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subject,
+                               const std::vector<double>& amplitudes_deg,
+                               const ProgressFn& progress, double progress_from,
+                               double progress_to) {
+  SubjectSweep out;
+  out.subject = subject.name;
+  board.plant().SetInterface(subject.interface);
+  std::vector<double> load, unload, net, tload, tunload, tnet;
+  for (std::size_t i = 0; i < amplitudes_deg.size(); ++i) {
+    const double a = amplitudes_deg[i];
+    if (progress) {
+      progress("amplitude sweep: " + subject.name + " " +
+                   std::to_string(static_cast<int>(a)) + "°",
+               progress_from + (progress_to - progress_from) * static_cast<double>(i) /
+                                   static_cast<double>(amplitudes_deg.size()));
+    }
+    const TrialOutcome t = RunTrial(board, PaperSine(a), false);
+    AmplitudePoint pt;
+    pt.amplitude_deg = a;
+    std::vector<double> l, u, n, e, tl, tu, tn, te;
+    for (const WindowOutcome* w : AnalysedFlexions(t, 5)) {
+      l.push_back(w->load);
+      u.push_back(w->unload);
+      n.push_back(w->net);
+      e.push_back(w->eta);
+      tl.push_back(w->truth_load);
+      tu.push_back(w->truth_unload);
+      tn.push_back(w->truth_net);
+      te.push_back(w->truth_eta);
+      pt.flexions.push_back(*w);
+    }
+    pt.load = host::Describe(l);
+    pt.unload = host::Describe(u);
+    pt.net = host::Describe(n);
+    pt.eta = host::Describe(e);
+    pt.truth_load = host::Describe(tl);
+    pt.truth_unload = host::Describe(tu);
+    pt.truth_net = host::Describe(tn);
+    pt.truth_eta = host::Describe(te);
+    pt.power_rmse_pct_peak =
+        t.truth_peak_power_W > 0 ? 100.0 * t.power_rmse_W / t.truth_peak_power_W : 0.0;
+    load.push_back(pt.load.mean);
+    unload.push_back(pt.unload.mean);
+    net.push_back(pt.net.mean);
+    tload.push_back(pt.truth_load.mean);
+    tunload.push_back(pt.truth_unload.mean);
+    tnet.push_back(pt.truth_net.mean);
+    out.points.push_back(std::move(pt));
+  }
+  auto nrmse = [](const std::vector<double>& a, const std::vector<double>& b,
+                  double* rmse) {
+    *rmse = host::Rmse(a, b);
+    const double range = host::Range(b);
+    return range > 0 ? 100.0 * *rmse / range : 0.0;
+  };
+  out.nrmse_load = nrmse(load, tload, &out.rmse_load);
+  out.nrmse_unload = nrmse(unload, tunload, &out.rmse_unload);
+  out.nrmse_net = nrmse(net, tnet, &out.rmse_net);
+  return out;
+}
+
+}  // namespace mjc::sim

@@ -1,0 +1,167 @@
+// The application state machine against a scripted I/O (no plant): transitions,
+// refusals, the same-tick fault stop, and the event stream. Runs on the host and on
+// the Cortex-M4.
+#include <cstdint>
+
+#include "mjc/app/joint_app.h"
+#include "vector_test.h"
+
+namespace {
+
+using namespace mjc;
+using namespace mjc::app;
+
+// Sensors at rest at zero; corrupts the joint frame on request; records actuation.
+struct ScriptedIo {
+  bool corrupt = false;
+  Actuation written;
+  int writes = 0;
+  Sample ISR_Read() {
+    Sample s;
+    s.joint_frame = EncodeJointFrame(0, false);
+    if (corrupt) s.joint_frame ^= 0x0001u;
+    return s;
+  }
+  void ISR_Write(const Actuation& a) {
+    written = a;
+    ++writes;
+  }
+};
+static_assert(hal::JointIo<ScriptedIo>);
+
+BacklashConfig Calibration() {
+  BacklashConfig b;
+  b.c_right = Angle::FromDouble(0.0175);
+  b.c_left = Angle::FromDouble(-0.0175);
+  return b;
+}
+
+SineConfig ShortSine() {
+  SineConfig s;
+  s.amplitude = Angle::FromDouble(0.1);
+  s.frequency = Frequency::FromDouble(10.0);
+  s.repetitions = 2;
+  return s;
+}
+
+// Each case has its own static app: a JointApp holds its delay lines and queues
+// (~20 KB), too much for a test's stack on the target.
+#define MJC_FRESH_APP(name) static JointApp name(ControlConfig{})
+
+MJC_VECTOR_TEST(JointApp, TrialRefusedUntilCalibrated) {
+  MJC_FRESH_APP(app);
+  ScriptedIo io;
+  VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result ==
+                 CommandResult::kRefusedUncalibrated);
+  VT_EXPECT_TRUE(app.SetCalibration(Calibration()).result == CommandResult::kAccepted);
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(app.calibrated());
+  VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result == CommandResult::kAccepted);
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(io.written.bridge_enabled);
+}
+
+MJC_VECTOR_TEST(JointApp, InvalidCalibrationRefusedWithReasonOldKept) {
+  MJC_FRESH_APP(app);
+  ScriptedIo io;
+  app.SetCalibration(Calibration());
+  app.ISR_Tick(io);
+  BacklashConfig bad = Calibration();
+  bad.c_left = Angle::FromDouble(0.1);  // left above right
+  const CommandOutcome o = app.SetCalibration(bad);
+  VT_EXPECT_TRUE(o.result == CommandResult::kRefusedInvalid);
+  VT_EXPECT_EQ(o.detail, static_cast<int>(BacklashConfigError::kLeftAboveRight));
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(app.control().config().backlash.c_left == Calibration().c_left);
+}
+
+MJC_VECTOR_TEST(JointApp, TrialRunsToCompletionThenIdles) {
+  MJC_FRESH_APP(app);
+  ScriptedIo io;
+  app.SetCalibration(Calibration());
+  app.ISR_Tick(io);
+  app.StartTrial(ShortSine());
+  int running_ticks = 0;
+  for (int i = 0; i < 5000 && (i == 0 || app.state() != AppState::kIdle); ++i) {
+    app.ISR_Tick(io);
+    if (app.state() == AppState::kRunning) ++running_ticks;
+  }
+  VT_EXPECT_TRUE(app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(!io.written.bridge_enabled);
+  VT_EXPECT_EQ(running_ticks, 2 * 1000);  // two 10 Hz cycles at 10 kHz
+  // Events: running, then idle.
+  AppEvent e;
+  int changes = 0;
+  while (app.PopEvent(&e)) {
+    if (e.kind == AppEvent::Kind::kStateChanged) ++changes;
+  }
+  VT_EXPECT_EQ(changes, 2);
+}
+
+MJC_VECTOR_TEST(JointApp, FaultStopsBridgeInSameTickAndLatches) {
+  MJC_FRESH_APP(app);
+  ScriptedIo io;
+  app.SetCalibration(Calibration());
+  app.ISR_Tick(io);
+  app.StartTrial(ShortSine());
+  for (int i = 0; i < 100; ++i) app.ISR_Tick(io);
+  VT_EXPECT_TRUE(io.written.bridge_enabled);
+  io.corrupt = true;
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(!io.written.bridge_enabled);
+  VT_EXPECT_EQ(io.written.duty.raw(), 0);
+  VT_EXPECT_TRUE(app.state() == AppState::kFault);
+  // Refused while the cause is present; accepted when it is gone.
+  app.ClearFaults();
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(app.state() == AppState::kFault);
+  VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result == CommandResult::kRefusedNotIdle);
+  io.corrupt = false;
+  app.ISR_Tick(io);
+  app.ClearFaults();
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(app.state() == AppState::kIdle);
+  bool saw_fault = false, saw_refusal = false;
+  AppEvent e;
+  while (app.PopEvent(&e)) {
+    if (e.kind == AppEvent::Kind::kFault && e.fault == Fault::kJointParity)
+      saw_fault = true;
+    if (e.kind == AppEvent::Kind::kCommandRefused &&
+        e.refusal.result == CommandResult::kRefusedFaultActive) {
+      saw_refusal = true;
+    }
+  }
+  VT_EXPECT_TRUE(saw_fault && saw_refusal);
+}
+
+MJC_VECTOR_TEST(JointApp, ConfigurationRefusedUnlessIdle) {
+  MJC_FRESH_APP(app);
+  ScriptedIo io;
+  app.SetCalibration(Calibration());
+  app.ISR_Tick(io);
+  app.StartTrial(ShortSine());
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(app.Configure(ControlConfig{}).result == CommandResult::kRefusedNotIdle);
+  VT_EXPECT_TRUE(app.SetCalibration(Calibration()).result ==
+                 CommandResult::kRefusedNotIdle);
+  app.Stop();
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(app.Configure(ControlConfig{}).result == CommandResult::kAccepted);
+}
+
+MJC_VECTOR_TEST(SpscQueue, FullQueueDropsAndCounts) {
+  SpscQueue<int, 4> q;
+  for (int i = 0; i < 4; ++i) VT_EXPECT_TRUE(q.ISR_Push(i));
+  VT_EXPECT_TRUE(!q.ISR_Push(99));
+  VT_EXPECT_EQ(q.dropped(), 1u);
+  int v = -1;
+  for (int i = 0; i < 4; ++i) {
+    VT_EXPECT_TRUE(q.Pop(&v));
+    VT_EXPECT_EQ(v, i);
+  }
+  VT_EXPECT_TRUE(!q.Pop(&v));
+}
+
+}  // namespace
