@@ -351,10 +351,14 @@ int Report::Finish(double wall_s, double simulated_s) {
 }
 
 int Run(const std::string& scenario, const plant::PlantParams& robot,
-        const std::vector<plant::PlantParams>& subjects, std::uint64_t seed,
-        Report& report) {
+        const std::vector<plant::PlantParams>& subjects, const ControlConfig& config,
+        std::uint64_t seed, Report& report) {
   const auto start = std::chrono::steady_clock::now();
-  sim::SimBoard board(robot, sim::DefaultBoardConfig());
+  sim::SimBoard board(robot, config);
+  if (board.app().control().config().velocity_window != config.velocity_window) {
+    throw std::runtime_error("the board refused the configuration (velocity window " +
+                             std::to_string(config.velocity_window) + ")");
+  }
   report.Progress("calibration sweep on the robot alone", 0.0);
   SweepConfig sweep;
   sweep.start_amplitude = Angle{};

@@ -42,7 +42,7 @@ class Report {
 // Runs `scenario` ("all", "calibration", "repeatability", "amplitude"); the board is
 // always calibrated first (it refuses trials until then). Returns the exit status.
 int Run(const std::string& scenario, const plant::PlantParams& robot,
-        const std::vector<plant::PlantParams>& subjects, std::uint64_t seed,
-        Report& report);
+        const std::vector<plant::PlantParams>& subjects, const ControlConfig& config,
+        std::uint64_t seed, Report& report);
 
 }  // namespace mjc::paper

@@ -1,0 +1,82 @@
+// Fidelity and speed of the simulated board, for ./bench: the calibration fit on the
+// robot alone, the amplitude sweep of the three subjects and an elastic interface, all
+// against plant ground truth with sensor noise on (seeded), at mjc-paper's settings.
+//
+//   power_rmse_pct_peak      worst trial, board power vs truth (aligned), % of peak
+//   power_rmse_pct_peak_25deg  the same at 25° (the amplitude the paper tunes to)
+//   window_energy_err_pct    worst analysed flexion: max(|ΔE_load|, |ΔE_unload|) / E_load
+//   eta_err_pt               worst |η_board − η_truth| over the analysed flexions
+//   eta_lossless_pt          worst |η_board| with a purely elastic interface
+//   eta_lossless_truth_pt    worst |η_truth| there: windows cut at the commanded phase
+//                            leave a little elastic energy between their ends at small
+//                            amplitudes (the joint trails the command through the slack)
+//   calib_err_deg            max |ĉ − c| of c_r, c_l
+//   calib_fit_ms             the fit's wall time
+//   sim_realtime_factor      simulated seconds per wall second, one joint, one core
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "mjc/plant/params.h"
+#include "mjc/sim/scenarios.h"
+
+int main() {
+  using namespace mjc;
+  using namespace mjc::sim;
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  plant::PlantParams robot = plant::LoadPlantParams("default");
+  robot.integration.max_step_s = 33.4e-6;  // mjc-paper's substep
+
+  const auto start = std::chrono::steady_clock::now();
+  SimBoard board(robot, DefaultBoardConfig());
+  SweepConfig sweep;
+  sweep.end_amplitude = Angle::Quantize(30.0 * kDeg);
+  sweep.frequency = Frequency::FromDouble(0.5);
+  sweep.repetitions = 10;
+  sweep.rest_ms = 500;
+  const CalibrationOutcome cal = RunCalibration(board, sweep);
+  if (!cal.uploaded) {
+    std::fprintf(stderr, "sim_fidelity: calibration failed: %s\n", cal.message.c_str());
+    return 1;
+  }
+  double power = 0, power25 = 0, energy = 0, eta = 0;
+  for (const char* name : {"subject1", "subject2", "subject3"}) {
+    const SubjectSweep s = RunAmplitudeSweep(board, plant::LoadPlantParams(name),
+                                             {6, 8, 11, 15, 20, 25}, nullptr, 0, 1);
+    for (const AmplitudePoint& p : s.points) {
+      power = std::max(power, p.power_rmse_pct_peak);
+      if (p.amplitude_deg == 25) power25 = std::max(power25, p.power_rmse_pct_peak);
+      for (const WindowOutcome& w : p.flexions) {
+        const double e = std::max(std::fabs(w.load - w.truth_load),
+                                  std::fabs(w.unload - w.truth_unload));
+        energy = std::max(energy, 100.0 * e / std::fabs(w.truth_load));
+        eta = std::max(eta, std::fabs(w.eta - w.truth_eta));
+      }
+    }
+  }
+  plant::PlantParams elastic = plant::LoadPlantParams("subject1");
+  elastic.interface.damping_Nm_s_per_rad = 0.0;
+  const SubjectSweep lossless =
+      RunAmplitudeSweep(board, elastic, {6, 8, 11, 15, 20, 25}, nullptr, 0, 1);
+  double eta_lossless = 0, eta_lossless_truth = 0;
+  for (const AmplitudePoint& p : lossless.points) {
+    for (const WindowOutcome& w : p.flexions) {
+      eta_lossless = std::max(eta_lossless, std::fabs(w.eta));
+      eta_lossless_truth = std::max(eta_lossless_truth, std::fabs(w.truth_eta));
+    }
+  }
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("power_rmse_pct_peak: %.2f %%\n", power);
+  std::printf("power_rmse_pct_peak_25deg: %.2f %%\n", power25);
+  std::printf("window_energy_err_pct: %.2f %%\n", energy);
+  std::printf("eta_err_pt: %.2f points\n", eta);
+  std::printf("eta_lossless_pt: %.2f points\n", eta_lossless);
+  std::printf("eta_lossless_truth_pt: %.2f points\n", eta_lossless_truth);
+  std::printf("calib_err_deg: %.4f deg\n",
+              std::max(std::fabs(cal.error_right_deg), std::fabs(cal.error_left_deg)));
+  std::printf("calib_fit_ms: %.1f ms\n", cal.fit.elapsed_ms);
+  std::printf("sim_realtime_factor: %.0f x\n", board.plant().truth().time_s / wall);
+  return 0;
+}
