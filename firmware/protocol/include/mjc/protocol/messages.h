@@ -1,0 +1,358 @@
+// The joint board's CAN messages: the single source of truth. Each message is a struct
+// (the values, in the firmware's own types) and a Message<> specialisation (function
+// code, length, sender, and the signal list placing each field in the payload). The
+// codec (codec.h) and the DBC file (host_tools: mjc-dbc, maestro_jc.dbc) are derived
+// from these lists and nothing else.
+//
+// Wire rules: every frame fits classical CAN (≤ 8 bytes); little-endian signals;
+// fixed-point fields travel as their raw Q-format integers (DBC factor 2^-F), so the
+// board never converts and host and board agree bit for bit; enums travel as their
+// stable numbers and unknown values are refused on decode.
+#pragma once
+
+#include <cstdint>
+#include <tuple>
+
+#include "mjc/core/interface_energy.h"
+#include "mjc/core/quantities.h"
+#include "mjc/core/supervisor.h"
+#include "mjc/core/trajectory.h"
+#include "mjc/protocol/signal.h"
+
+// Enum values accepted from the bus, in each enum's own namespace (argument-dependent
+// lookup finds them).
+namespace mjc {
+
+constexpr bool ValidEnumValue(Fault f) {
+  switch (f) {
+    case Fault::kNone:
+    case Fault::kJointParity:
+    case Fault::kJointErrorFlag:
+    case Fault::kJointJump:
+    case Fault::kJointStuck:
+    case Fault::kMotorStuck:
+    case Fault::kJointAngleLimit:
+    case Fault::kMotorAngleLimit:
+    case Fault::kTorqueLimit:
+    case Fault::kVelocityLimit:
+    case Fault::kTickOverrun:
+    case Fault::kCommandTimeout:
+      return true;
+  }
+  return false;
+}
+constexpr bool ValidEnumValue(Segment s) { return static_cast<std::uint8_t>(s) <= 7; }
+constexpr bool ValidEnumValue(Motion m) {
+  return m == Motion::kFlexion || m == Motion::kExtension;
+}
+
+}  // namespace mjc
+
+namespace mjc::protocol {
+
+// Function codes, 7 bits, ordered by urgency (lower wins arbitration). Stable: never
+// renumber.
+enum class Function : std::uint8_t {
+  kFault = 0x01,
+  kCommand = 0x02,
+  kSetpoint = 0x03,
+  kCommandResult = 0x04,
+  kTrialConfig = 0x05,
+  kSweepConfig = 0x06,
+  kWindowHeader = 0x08,
+  kWindowEnergy = 0x09,
+  kWindowWork = 0x0A,
+  kWindowPeaks = 0x0B,
+  kWindowTicks = 0x0C,
+  kParamWrite = 0x10,
+  kParamRead = 0x11,
+  kParamValue = 0x12,
+  kTelemetryAngles = 0x20,
+  kTelemetryTorque = 0x21,
+  kTelemetryPower = 0x22,
+  kTelemetryEnergy = 0x23,
+  kTelemetryControl = 0x24,
+  kHeartbeat = 0x30,
+  kHostHeartbeat = 0x31,
+  kIsoTpToBoard = 0x3E,    // ISO-TP channel host → board (calibration records)
+  kIsoTpFromBoard = 0x3F,  // ISO-TP channel board → host
+};
+
+enum class Sender : std::uint8_t { kBoard, kHost };
+
+// The board's state as it travels (equal to mjc::app::AppState, checked there).
+enum class BoardState : std::uint8_t {
+  kIdle = 0,
+  kCalibrating = 1,
+  kRunning = 2,
+  kFault = 3
+};
+constexpr bool ValidEnumValue(BoardState s) { return static_cast<std::uint8_t>(s) <= 3; }
+
+enum class CommandCode : std::uint8_t {
+  kStop = 1,
+  kClearFaults = 2,
+  kStartTrial = 3,   // with the last TrialConfig
+  kStartSweep = 4,   // with the last SweepConfig
+  kStartStream = 5,  // streamed setpoints from the present position
+};
+constexpr bool ValidEnumValue(CommandCode c) {
+  return static_cast<std::uint8_t>(c) >= 1 && static_cast<std::uint8_t>(c) <= 5;
+}
+
+// A command's outcome (equal to mjc::app::CommandResult, checked there).
+enum class CommandOutcomeCode : std::uint8_t {
+  kAccepted = 0,
+  kRefusedNotIdle = 1,
+  kRefusedUncalibrated = 2,
+  kRefusedInvalid = 3,
+  kRefusedFaultActive = 4,
+  kRefusedBusy = 5,
+};
+constexpr bool ValidEnumValue(CommandOutcomeCode c) {
+  return static_cast<std::uint8_t>(c) <= 5;
+}
+
+// Parameters readable and writable over the bus. Stable numbers.
+enum class ParamId : std::uint16_t {
+  kTelemetryAnglesHz = 0x0100,
+  kTelemetryTorqueHz = 0x0101,
+  kTelemetryPowerHz = 0x0102,
+  kTelemetryEnergyHz = 0x0103,
+  kTelemetryControlHz = 0x0104,
+  kHeartbeatHz = 0x0105,
+  kStreamTimeoutMs = 0x0110,
+  kPositionKp = 0x0200,   // Q16, duty per rad
+  kPositionKi = 0x0201,   // Q16, duty per rad·s
+  kPositionKd = 0x0202,   // Q16, duty per rad/s
+  kPositionKff = 0x0203,  // Q16, duty per rad/s
+  kVelocityWindow = 0x0210,
+  kTorqueMax = 0x0300,  // Q24 N·m
+};
+constexpr bool ValidEnumValue(ParamId id) {
+  switch (id) {
+    case ParamId::kTelemetryAnglesHz:
+    case ParamId::kTelemetryTorqueHz:
+    case ParamId::kTelemetryPowerHz:
+    case ParamId::kTelemetryEnergyHz:
+    case ParamId::kTelemetryControlHz:
+    case ParamId::kHeartbeatHz:
+    case ParamId::kStreamTimeoutMs:
+    case ParamId::kPositionKp:
+    case ParamId::kPositionKi:
+    case ParamId::kPositionKd:
+    case ParamId::kPositionKff:
+    case ParamId::kVelocityWindow:
+    case ParamId::kTorqueMax:
+      return true;
+  }
+  return false;
+}
+
+enum class ParamStatus : std::uint8_t {
+  kOk = 0,
+  kUnknown = 1,
+  kOutOfRange = 2,
+  kRefusedNotIdle = 3,
+};
+constexpr bool ValidEnumValue(ParamStatus s) { return static_cast<std::uint8_t>(s) <= 3; }
+
+// Energies travel in Q7.24 J (±128 J, 0.06 µJ): a window's energy is millijoules.
+using WireEnergy = Fixed<Joule, 24>;
+
+// --- the messages ------------------------------------------------------------------
+
+struct FaultEvent {
+  Fault fault = Fault::kNone;
+  std::uint32_t tick = 0;
+  BoardState state = BoardState::kFault;
+};
+struct Command {
+  CommandCode code = CommandCode::kStop;
+  std::uint8_t sequence = 0;
+};
+struct Setpoint {
+  Angle position;
+  std::uint16_t sequence = 0;
+};
+struct CommandResult {
+  CommandCode code = CommandCode::kStop;
+  CommandOutcomeCode outcome = CommandOutcomeCode::kAccepted;
+  std::uint8_t detail = 0;
+  std::uint8_t sequence = 0;
+};
+struct TrialConfig {
+  Angle amplitude;
+  std::uint16_t frequency_mHz = 500;
+  std::uint8_t repetitions = 5;
+  std::uint8_t rest_100ms = 15;
+};
+struct SweepConfig {
+  Angle end_amplitude;
+  std::uint16_t frequency_mHz = 500;
+  std::uint8_t repetitions = 10;
+  std::uint8_t rest_100ms = 5;
+};
+struct WindowHeader {
+  Motion motion = Motion::kFlexion;
+  std::uint16_t repetition = 0;
+  bool eta_valid = false;
+  Ratio eta_percent;
+};
+struct WindowEnergy {
+  WireEnergy loading;
+  WireEnergy unloading;
+};
+struct WindowWork {
+  WireEnergy positive;
+  WireEnergy negative;
+};
+struct WindowPeaks {
+  Power peak_power;
+  Torque peak_torque;
+};
+struct WindowTicks {
+  std::uint32_t start_tick = 0;
+  std::uint16_t peak_offset = 0;  // ticks from start
+  std::uint16_t end_offset = 0;   // ticks from start
+};
+struct ParamWrite {
+  ParamId id = ParamId::kHeartbeatHz;
+  std::int32_t value = 0;
+};
+struct ParamRead {
+  ParamId id = ParamId::kHeartbeatHz;
+};
+struct ParamValue {
+  ParamId id = ParamId::kHeartbeatHz;
+  std::int32_t value = 0;
+  ParamStatus status = ParamStatus::kOk;
+};
+struct TelemetryAngles {
+  Angle motor;
+  Angle joint;
+};
+struct TelemetryTorque {
+  Torque torque;
+  Angle cable_side;
+};
+struct TelemetryPower {
+  Power power;
+  AngularVelocity joint_velocity;
+};
+struct TelemetryEnergy {
+  Energy energy;
+};
+struct TelemetryControl {
+  Angle setpoint;
+  Duty duty;
+  Segment segment = Segment::kIdle;
+  BoardState state = BoardState::kIdle;
+};
+struct Heartbeat {
+  BoardState state = BoardState::kIdle;
+  bool calibrated = false;
+  bool bridge_enabled = false;
+  Fault fault = Fault::kNone;
+  std::uint32_t tick = 0;
+};
+struct HostHeartbeat {
+  std::uint8_t sequence = 0;
+};
+
+template <class M>
+struct Message;
+
+#define MJC_MESSAGE(Type, function, length, sender, ...)           \
+  template <>                                                      \
+  struct Message<Type> {                                           \
+    using T = Type;                                                \
+    static constexpr Function kFunction = Function::function;      \
+    static constexpr const char* kName = #Type;                    \
+    static constexpr std::uint8_t kLength = length;                \
+    static constexpr Sender kSender = Sender::sender;              \
+    static constexpr auto kSignals = std::make_tuple(__VA_ARGS__); \
+  }
+
+MJC_MESSAGE(FaultEvent, kFault, 7, kBoard, MakeSignal("fault_code", &T::fault, 0, 16),
+            MakeSignal("tick", &T::tick, 16, 32, "tick"),
+            MakeSignal("state", &T::state, 48, 8));
+MJC_MESSAGE(Command, kCommand, 2, kHost, MakeSignal("command", &T::code, 0, 8),
+            MakeSignal("sequence", &T::sequence, 8, 8));
+MJC_MESSAGE(Setpoint, kSetpoint, 6, kHost,
+            MakeSignal("position_rad", &T::position, 0, 32, "rad"),
+            MakeSignal("sequence", &T::sequence, 32, 16));
+MJC_MESSAGE(CommandResult, kCommandResult, 4, kBoard,
+            MakeSignal("command", &T::code, 0, 8),
+            MakeSignal("outcome", &T::outcome, 8, 8),
+            MakeSignal("detail", &T::detail, 16, 8),
+            MakeSignal("sequence", &T::sequence, 24, 8));
+MJC_MESSAGE(TrialConfig, kTrialConfig, 8, kHost,
+            MakeSignal("amplitude_rad", &T::amplitude, 0, 32, "rad"),
+            MakeSignal("frequency_mHz", &T::frequency_mHz, 32, 16, "mHz"),
+            MakeSignal("repetitions", &T::repetitions, 48, 8),
+            MakeSignal("rest_100ms", &T::rest_100ms, 56, 8, "100 ms"));
+MJC_MESSAGE(SweepConfig, kSweepConfig, 8, kHost,
+            MakeSignal("end_amplitude_rad", &T::end_amplitude, 0, 32, "rad"),
+            MakeSignal("frequency_mHz", &T::frequency_mHz, 32, 16, "mHz"),
+            MakeSignal("repetitions", &T::repetitions, 48, 8),
+            MakeSignal("rest_100ms", &T::rest_100ms, 56, 8, "100 ms"));
+MJC_MESSAGE(WindowHeader, kWindowHeader, 8, kBoard,
+            MakeSignal("motion", &T::motion, 0, 8),
+            MakeSignal("repetition", &T::repetition, 8, 16),
+            MakeSignal("eta_valid", &T::eta_valid, 24, 1),
+            MakeSignal("eta_pct", &T::eta_percent, 32, 32, "%"));
+MJC_MESSAGE(WindowEnergy, kWindowEnergy, 8, kBoard,
+            MakeSignal("loading_J", &T::loading, 0, 32, "J"),
+            MakeSignal("unloading_J", &T::unloading, 32, 32, "J"));
+MJC_MESSAGE(WindowWork, kWindowWork, 8, kBoard,
+            MakeSignal("positive_work_J", &T::positive, 0, 32, "J"),
+            MakeSignal("negative_work_J", &T::negative, 32, 32, "J"));
+MJC_MESSAGE(WindowPeaks, kWindowPeaks, 8, kBoard,
+            MakeSignal("peak_power_W", &T::peak_power, 0, 32, "W"),
+            MakeSignal("peak_torque_Nm", &T::peak_torque, 32, 32, "N.m"));
+MJC_MESSAGE(WindowTicks, kWindowTicks, 8, kBoard,
+            MakeSignal("start_tick", &T::start_tick, 0, 32, "tick"),
+            MakeSignal("peak_offset", &T::peak_offset, 32, 16, "tick"),
+            MakeSignal("end_offset", &T::end_offset, 48, 16, "tick"));
+MJC_MESSAGE(ParamWrite, kParamWrite, 6, kHost, MakeSignal("param", &T::id, 0, 16),
+            MakeSignal("value", &T::value, 16, 32));
+MJC_MESSAGE(ParamRead, kParamRead, 2, kHost, MakeSignal("param", &T::id, 0, 16));
+MJC_MESSAGE(ParamValue, kParamValue, 7, kBoard, MakeSignal("param", &T::id, 0, 16),
+            MakeSignal("value", &T::value, 16, 32),
+            MakeSignal("status", &T::status, 48, 8));
+MJC_MESSAGE(TelemetryAngles, kTelemetryAngles, 8, kBoard,
+            MakeSignal("motor_angle_rad", &T::motor, 0, 32, "rad"),
+            MakeSignal("joint_angle_rad", &T::joint, 32, 32, "rad"));
+MJC_MESSAGE(TelemetryTorque, kTelemetryTorque, 8, kBoard,
+            MakeSignal("torque_Nm", &T::torque, 0, 32, "N.m"),
+            MakeSignal("cable_angle_rad", &T::cable_side, 32, 32, "rad"));
+MJC_MESSAGE(TelemetryPower, kTelemetryPower, 8, kBoard,
+            MakeSignal("power_W", &T::power, 0, 32, "W"),
+            MakeSignal("joint_velocity_rad_s", &T::joint_velocity, 32, 32, "rad/s"));
+MJC_MESSAGE(TelemetryEnergy, kTelemetryEnergy, 8, kBoard,
+            MakeSignal("energy_J", &T::energy, 0, 64, "J"));
+MJC_MESSAGE(TelemetryControl, kTelemetryControl, 8, kBoard,
+            MakeSignal("setpoint_rad", &T::setpoint, 0, 32, "rad"),
+            MakeSignal("duty", &T::duty, 32, 16),
+            MakeSignal("segment", &T::segment, 48, 8),
+            MakeSignal("state", &T::state, 56, 8));
+MJC_MESSAGE(Heartbeat, kHeartbeat, 8, kBoard, MakeSignal("state", &T::state, 0, 8),
+            MakeSignal("calibrated", &T::calibrated, 8, 1),
+            MakeSignal("bridge_enabled", &T::bridge_enabled, 9, 1),
+            MakeSignal("fault_code", &T::fault, 16, 16),
+            MakeSignal("tick", &T::tick, 32, 32, "tick"));
+MJC_MESSAGE(HostHeartbeat, kHostHeartbeat, 1, kHost,
+            MakeSignal("sequence", &T::sequence, 0, 8));
+
+#undef MJC_MESSAGE
+
+// Every message, for iteration (the DBC, bus load, decoding any frame).
+using AllMessages =
+    std::tuple<FaultEvent, Command, Setpoint, CommandResult, TrialConfig, SweepConfig,
+               WindowHeader, WindowEnergy, WindowWork, WindowPeaks, WindowTicks,
+               ParamWrite, ParamRead, ParamValue, TelemetryAngles, TelemetryTorque,
+               TelemetryPower, TelemetryEnergy, TelemetryControl, Heartbeat,
+               HostHeartbeat>;
+
+}  // namespace mjc::protocol
