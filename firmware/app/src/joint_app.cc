@@ -54,6 +54,27 @@ CommandOutcome JointApp::StartCalibrationSweep(const SweepConfig& sweep) {
   return Submit(c);
 }
 
+CommandOutcome JointApp::StartStream(AngularVelocity max_rate) {
+  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
+  if (!calibrated_) return {CommandResult::kRefusedUncalibrated, 0};
+  if (max_rate.raw() <= 0) {
+    return {CommandResult::kRefusedInvalid,
+            static_cast<std::uint8_t>(TrajectoryError::kRateNotPositive)};
+  }
+  Command c;
+  c.kind = CommandKind::kStartStream;
+  c.stream_rate = max_rate;
+  return Submit(c);
+}
+
+void JointApp::ISR_FollowStream() {
+  if (control_.trajectory().mode() != TrajectoryMode::kStream) return;
+  const std::int32_t target = stream_target_.load(std::memory_order_relaxed);
+  if (target == applied_stream_target_) return;
+  applied_stream_target_ = target;
+  (void)control_.trajectory().SetStreamTarget(Angle::FromRaw(target));
+}
+
 CommandOutcome JointApp::Stop() {
   Command c;
   c.kind = CommandKind::kStop;
@@ -120,18 +141,39 @@ void JointApp::ISR_ApplyCommand() {
       }
       return ISR_Enter(trial ? AppState::kRunning : AppState::kCalibrating);
     }
+    case CommandKind::kStartStream: {
+      if (!idle) return ISR_Refuse(CommandResult::kRefusedNotIdle);
+      if (!calibrated_) return ISR_Refuse(CommandResult::kRefusedUncalibrated);
+      // From where the motor is (idle, the bridge was off and it may have moved): no
+      // jump on the first streamed tick; it holds there until targets arrive.
+      const Angle from = result_.telemetry.motor;
+      const TrajectoryError error =
+          control_.trajectory().StartStream(from, c.stream_rate);
+      if (error != TrajectoryError::kOk) {
+        return ISR_Refuse(CommandResult::kRefusedInvalid,
+                          static_cast<std::uint8_t>(error));
+      }
+      applied_stream_target_ = from.raw();
+      stream_target_.store(from.raw(), std::memory_order_relaxed);
+      return ISR_Enter(AppState::kRunning);
+    }
     case CommandKind::kStop:
       control_.trajectory().Stop();
       if (state_ != AppState::kFault) ISR_Enter(AppState::kIdle);
       return;
     case CommandKind::kClearFaults:
-      if (state_ != AppState::kFault) return;
-      if (!control_.ClearFaults()) return ISR_Refuse(CommandResult::kRefusedFaultActive);
-      return ISR_Enter(AppState::kIdle);
+      // Judged in this tick's step, on this tick's sample (ISR_AfterStep).
+      if (state_ == AppState::kFault) control_.RequestClearFaults();
+      return;
   }
 }
 
 void JointApp::ISR_AfterStep() {
+  if (result_.clear == FaultClear::kCleared && result_.raised == Fault::kNone) {
+    ISR_Enter(AppState::kIdle);
+  } else if (result_.clear == FaultClear::kRefused) {
+    ISR_Refuse(CommandResult::kRefusedFaultActive);
+  }
   if (result_.raised != Fault::kNone) {
     AppEvent e;
     e.kind = AppEvent::Kind::kFault;

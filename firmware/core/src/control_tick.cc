@@ -32,7 +32,7 @@ ControlTick::ControlTick()
   Configure(config_);
 }
 
-ControlConfigError ControlTick::Configure(const ControlConfig& config) {
+ControlConfigError ControlTick::Validate(const ControlConfig& config) {
   if (config.tick_hz < 1000 || config.tick_hz > 20000)
     return ControlConfigError::kTickRate;
   if (ValidateMotorEncoderConfig(config.motor_encoder) != MotorEncoderConfigError::kOk) {
@@ -41,26 +41,29 @@ ControlConfigError ControlTick::Configure(const ControlConfig& config) {
   if (ValidateJointEncoderConfig(config.joint_encoder) != JointEncoderConfigError::kOk) {
     return ControlConfigError::kJointEncoder;
   }
-  if (Validate(config.backlash) != BacklashConfigError::kOk) {
+  if (mjc::Validate(config.backlash) != BacklashConfigError::kOk) {
     return ControlConfigError::kBacklash;
   }
   if (config.sea_stiffness <= Stiffness{} || config.sea_stiffness > Stiffness(100)) {
     return ControlConfigError::kStiffness;
   }
-  if (config.velocity_window > kMaxVelocityWindow)
-    return ControlConfigError::kVelocityWindow;
-  PositionLoopConfig position = config.position;
-  position.tick_hz = config.tick_hz;
-  if (Validate(position) != PositionLoopError::kOk)
-    return ControlConfigError::kPositionLoop;
-  // The estimator validates against its storage; try it before touching anything.
-  VelocityEstimatorConfig velocity{.window = config.velocity_window,
-                                   .tick_hz = config.tick_hz};
-  if (estimator_.Configure(velocity) != VelocityEstimatorError::kOk) {
-    // Restore the estimator to the config still in force.
-    estimator_.Configure({.window = config_.velocity_window, .tick_hz = config_.tick_hz});
+  const VelocityEstimatorConfig velocity{.window = config.velocity_window,
+                                         .tick_hz = config.tick_hz};
+  if (VelocityEstimator::Check(velocity, kMaxVelocityWindow) !=
+      VelocityEstimatorError::kOk) {
     return ControlConfigError::kVelocityWindow;
   }
+  PositionLoopConfig position = config.position;
+  position.tick_hz = config.tick_hz;
+  if (mjc::Validate(position) != PositionLoopError::kOk)
+    return ControlConfigError::kPositionLoop;
+  return ControlConfigError::kOk;
+}
+
+ControlConfigError ControlTick::Configure(const ControlConfig& config) {
+  const ControlConfigError error = Validate(config);
+  if (error != ControlConfigError::kOk) return error;
+  estimator_.Configure({.window = config.velocity_window, .tick_hz = config.tick_hz});
 
   config_ = config;
   config_.position.tick_hz = config.tick_hz;
@@ -140,6 +143,13 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   in.applied_duty = last_duty_;
   in.tick_overrun = sample.tick_overrun;
   in.command_timeout = sample.command_timeout;
+  r.clear = FaultClear::kNone;
+  if (clear_requested_) {
+    clear_requested_ = false;
+    if (!supervisor_.bridge_enabled()) {
+      r.clear = supervisor_.Clear(in) ? FaultClear::kCleared : FaultClear::kRefused;
+    }
+  }
   const bool was_healthy = supervisor_.bridge_enabled();
   const Fault fault = supervisor_.Check(tick_, in);
   if (was_healthy && fault != Fault::kNone) {

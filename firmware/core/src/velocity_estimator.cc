@@ -7,34 +7,54 @@ void DelayLine::Fill(std::int32_t value) {
   next_ = 0;
 }
 
-VelocityEstimatorError VelocityEstimator::Configure(
-    const VelocityEstimatorConfig& config) {
-  if (config.window % 2 == 0) return VelocityEstimatorError::kWindowEven;
-  if (config.window < kMinWindow) return VelocityEstimatorError::kWindowTooShort;
-  if (config.window > storage_.size()) return VelocityEstimatorError::kWindowTooLong;
-  if (config.tick_hz < 100 || config.tick_hz > 100000) {
-    return VelocityEstimatorError::kTickRateOutOfRange;
-  }
-  // Velocity in Q20 from a slope in raw Q24 angle per tick:
-  //   ω_raw = (S1 − c·S0) · f / (D · 2^4).
-  // Pick the largest shift whose multiplier still fits in 30 bits (precision ≥ 2^-29).
+namespace {
+
+struct SlopeScale {
+  std::int64_t multiplier = 0;
+  int shift = 0;
+};
+
+// Velocity in Q20 from a slope in raw Q24 angle per tick:
+//   ω_raw = (S1 − c·S0) · f / (D · 2^4).
+// The largest shift whose multiplier still fits in 30 bits (precision ≥ 2^-29); a zero
+// multiplier means the window is too short for this tick rate.
+SlopeScale ScaleFor(const VelocityEstimatorConfig& config) {
   const auto n = static_cast<std::int64_t>(config.window);
   const std::int64_t d = n * (n * n - 1) / 12;
   const std::int64_t denominator = 16 * d;
-  std::int64_t best_m = 0;
-  int best_shift = 0;
+  SlopeScale best;
   for (int s = 32; s <= 62; ++s) {
     const std::int64_t f = config.tick_hz;
     if (f > (std::int64_t{1} << (62 - s))) break;  // f·2^s must fit
     const std::int64_t m = ((f << s) + denominator / 2) / denominator;
     if (m >= (std::int64_t{1} << 30)) break;
-    best_m = m;
-    best_shift = s;
+    best = {m, s};
   }
-  if (best_m == 0) return VelocityEstimatorError::kWindowTooShort;
+  return best;
+}
+
+}  // namespace
+
+VelocityEstimatorError VelocityEstimator::Check(const VelocityEstimatorConfig& config,
+                                                std::size_t capacity) {
+  if (config.window % 2 == 0) return VelocityEstimatorError::kWindowEven;
+  if (config.window < kMinWindow) return VelocityEstimatorError::kWindowTooShort;
+  if (config.window > capacity) return VelocityEstimatorError::kWindowTooLong;
+  if (config.tick_hz < 100 || config.tick_hz > 100000) {
+    return VelocityEstimatorError::kTickRateOutOfRange;
+  }
+  if (ScaleFor(config).multiplier == 0) return VelocityEstimatorError::kWindowTooShort;
+  return VelocityEstimatorError::kOk;
+}
+
+VelocityEstimatorError VelocityEstimator::Configure(
+    const VelocityEstimatorConfig& config) {
+  const VelocityEstimatorError error = Check(config, storage_.size());
+  if (error != VelocityEstimatorError::kOk) return error;
+  const SlopeScale scale = ScaleFor(config);
   window_ = config.window;
-  multiplier_ = static_cast<std::int32_t>(best_m);
-  shift_ = best_shift;
+  multiplier_ = static_cast<std::int32_t>(scale.multiplier);
+  shift_ = scale.shift;
   Reset(Angle{});
   return VelocityEstimatorError::kOk;
 }

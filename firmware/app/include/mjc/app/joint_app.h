@@ -15,6 +15,7 @@
 // refusals) go back through another SPSC queue.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 
 #include "hal/joint_io.h"
@@ -71,6 +72,19 @@ class JointApp {
   CommandOutcome SetCalibration(const BacklashConfig& backlash);
   CommandOutcome StartTrial(const SineConfig& sine);
   CommandOutcome StartCalibrationSweep(const SweepConfig& sweep);
+  // Streamed setpoints: the setpoint moves toward the latest target at most max_rate
+  // (rad/s), starting from the present setpoint. Needs a calibrated, idle board.
+  CommandOutcome StartStream(AngularVelocity max_rate);
+  // The latest streamed target (rad); takes effect at the next tick. Lock-free: one
+  // 32-bit store, read once a tick.
+  void SetStreamTarget(Angle target) {
+    stream_target_.store(target.raw(), std::memory_order_relaxed);
+  }
+  // Set by the CAN side when streamed setpoints stop arriving: the tick's supervisor
+  // sees it as a command timeout (controlled stop, latched).
+  void SetCommandTimeout(bool timed_out) {
+    command_timeout_.store(timed_out, std::memory_order_relaxed);
+  }
   CommandOutcome Stop();
   CommandOutcome ClearFaults();
 
@@ -87,7 +101,10 @@ class JointApp {
   template <hal::JointIo Io>
   void ISR_Tick(Io& io) {
     ISR_ApplyCommand();
-    control_.ISR_Step(io.ISR_Read(), &result_);
+    Sample sample = io.ISR_Read();
+    if (command_timeout_.load(std::memory_order_relaxed)) sample.command_timeout = true;
+    ISR_FollowStream();
+    control_.ISR_Step(sample, &result_);
     ISR_AfterStep();
     // A state left in this tick (trial done, stop) disarms before the write.
     if (!control_.armed()) result_.actuation = Actuation{};
@@ -100,6 +117,7 @@ class JointApp {
     kSetCalibration,
     kStartTrial,
     kStartSweep,
+    kStartStream,
     kStop,
     kClearFaults,
   };
@@ -108,10 +126,12 @@ class JointApp {
     ControlConfig config;
     SineConfig sine;
     SweepConfig sweep;
+    AngularVelocity stream_rate;
   };
 
   CommandOutcome Submit(const Command& command);
   void ISR_ApplyCommand();
+  void ISR_FollowStream();
   void ISR_AfterStep();
   void ISR_Enter(AppState next);
   void ISR_Refuse(CommandResult result, std::uint8_t detail = 0);
@@ -122,6 +142,10 @@ class JointApp {
   bool calibrated_ = false;
   SpscQueue<Command, 4> commands_;
   SpscQueue<AppEvent, 64> events_;
+  std::atomic<std::int32_t> stream_target_{0};
+  std::int32_t applied_stream_target_ = 0;
+  AngularVelocity stream_rate_;
+  std::atomic<bool> command_timeout_{false};
 };
 
 }  // namespace mjc::app

@@ -85,12 +85,16 @@ struct Telemetry {
   Fault fault = Fault::kNone;        // latched fault, kNone when healthy
 };
 
+// The outcome of a clear requested with RequestClearFaults().
+enum class FaultClear : std::uint8_t { kNone = 0, kCleared = 1, kRefused = 2 };
+
 struct TickResult {
   Actuation actuation;
   Telemetry telemetry;
   bool window_completed = false;  // `window` holds a new summary
   WindowSummary window;
-  Fault raised = Fault::kNone;  // a fault latched in this very tick
+  Fault raised = Fault::kNone;           // a fault latched in this very tick
+  FaultClear clear = FaultClear::kNone;  // a requested clear, judged on this sample
 };
 
 class ControlTick {
@@ -104,6 +108,10 @@ class ControlTick {
   // tick's state (the next Step() starts from its sample).
   ControlConfigError Configure(const ControlConfig& config);
 
+  // The validation Configure() applies, without a ControlTick (for the CAN side, which
+  // answers a parameter write before the tick takes it).
+  static ControlConfigError Validate(const ControlConfig& config);
+
   // Runs one tick (interrupt context). Writes every field of *out except `window`,
   // which is written only when window_completed is set: the summary is not copied or
   // cleared on the other ticks.
@@ -116,6 +124,10 @@ class ControlTick {
 
   // Clears a latched fault if its cause is gone (checked on the last sample).
   bool ClearFaults();
+  // Asks the next ISR_Step to clear a latched fault if that tick's own sample shows the
+  // cause gone; the outcome is in its TickResult::clear. For callers that hand the
+  // request over from another context (the application's command mailbox).
+  void RequestClearFaults() { clear_requested_ = true; }
   Fault fault() const { return supervisor_.latched(); }
 
   TrajectoryGenerator& trajectory() { return trajectory_; }
@@ -150,6 +162,7 @@ class ControlTick {
   SupervisorInput last_input_;
 
   std::uint32_t tick_ = 0;
+  bool clear_requested_ = false;
   bool started_ = false;
   bool armed_ = false;
   Angle joint_;  // last good θ_j

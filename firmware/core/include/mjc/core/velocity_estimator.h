@@ -83,6 +83,10 @@ class VelocityEstimator {
   // Validates and applies a config; on error the previous config stays.
   VelocityEstimatorError Configure(const VelocityEstimatorConfig& config);
 
+  // The same validation without an estimator: for storage of `capacity` samples.
+  static VelocityEstimatorError Check(const VelocityEstimatorConfig& config,
+                                      std::size_t capacity);
+
   // Fills the window with a constant angle: velocity reads zero from the next update.
   void Reset(Angle angle);
 

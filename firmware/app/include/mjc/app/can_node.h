@@ -1,0 +1,91 @@
+// The board's CAN side: received frames become JointApp commands, app events and
+// telemetry become frames on a transmit queue the CAN driver drains.
+//
+// Contexts: HandleFrame and Poll run in the main loop (never in the control tick);
+// the driver's transmit path pops frames from the queue (SPSC, so it may be an
+// interrupt). Nothing here allocates or blocks.
+//
+// Every received frame is accounted for: handled, ignored (another node's or a
+// board-to-host message), or malformed (counted by DecodeError and dropped).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "mjc/app/joint_app.h"
+#include "mjc/app/spsc_queue.h"
+#include "mjc/protocol/codec.h"
+
+namespace mjc::app {
+
+struct CanNodeConfig {
+  std::uint8_t node = 1;  // 1..8
+  // Transmit rates, Hz, 0 = off; each at most the tick rate. Defaults: 1 kHz angles and
+  // power, 100 Hz for the rest, 10 Hz heartbeat (the bus budget is in docs/ and
+  // `mjc busload`).
+  std::uint16_t angles_hz = 1000;
+  std::uint16_t torque_hz = 100;
+  std::uint16_t power_hz = 1000;
+  std::uint16_t energy_hz = 100;
+  std::uint16_t control_hz = 100;
+  std::uint16_t heartbeat_hz = 10;
+  // Streamed setpoints older than this stop the motor (command timeout, latched).
+  std::uint16_t stream_timeout_ms = 100;
+  // Largest setpoint speed while streaming, rad/s.
+  AngularVelocity stream_rate = AngularVelocity::FromDouble(2.0);
+};
+
+struct CanNodeCounters {
+  std::uint32_t handled = 0;
+  std::uint32_t ignored = 0;
+  std::array<std::uint32_t, 6> malformed{};  // by protocol::DecodeError
+  std::uint32_t tx_dropped = 0;              // transmit queue full
+  std::uint32_t stream_timeouts = 0;
+};
+
+class CanNode {
+ public:
+  CanNode(JointApp* app, const CanNodeConfig& config);
+
+  // A frame from the bus.
+  void HandleFrame(const protocol::CanFrame& frame);
+
+  // Once per control tick (after it), in the main loop: events, telemetry at their
+  // rates, the heartbeat, the stream timeout.
+  void Poll();
+
+  // The driver's side of the transmit queue.
+  bool PopTx(protocol::CanFrame* out) { return tx_.Pop(out); }
+
+  const CanNodeCounters& counters() const { return counters_; }
+  const CanNodeConfig& config() const { return config_; }
+
+ private:
+  template <class M>
+  void Send(const M& message);
+  void Reply(protocol::CommandCode code, const CommandOutcome& outcome, std::uint8_t seq);
+  void HandleCommand(const protocol::Command& c);
+  void HandleParam(protocol::ParamId id, bool write, std::int32_t value);
+  void SendEvent(const AppEvent& e);
+  bool Due(std::uint16_t hz, std::uint32_t* next_tick);
+
+  JointApp* app_;
+  CanNodeConfig config_;
+  CanNodeCounters counters_;
+  SpscQueue<protocol::CanFrame, 128> tx_;
+  protocol::TrialConfig trial_;
+  protocol::SweepConfig sweep_;
+  bool have_trial_ = false;
+  bool have_sweep_ = false;
+  std::uint8_t last_sequence_ = 0;
+  protocol::CommandCode last_command_ = protocol::CommandCode::kStop;
+  // Schedules, in control ticks.
+  std::uint32_t now_ = 0;
+  std::uint32_t next_angles_ = 0, next_torque_ = 0, next_power_ = 0, next_energy_ = 0,
+                next_control_ = 0, next_heartbeat_ = 0;
+  // Streaming: the tick of the last setpoint; armed while a stream runs.
+  bool streaming_ = false;
+  std::uint32_t last_setpoint_tick_ = 0;
+};
+
+}  // namespace mjc::app
