@@ -1,0 +1,56 @@
+// Worst-case CAN bus load of the Maestro's boards: every frame the protocol sends, at
+// its configured rate, timed with worst-case bit stuffing.
+//
+// Frame times (11-bit identifiers):
+//  - classical CAN: 47 + 8n bits (SOF … IFS) plus ⌊(34 + 8n − 1)/4⌋ stuff bits in the
+//    34 + 8n stuffable bits (the standard worst case: 135 bits for 8 bytes, 55 for 0);
+//  - CAN FD with bit-rate switching: at the nominal rate SOF … BRS (17 bits, up to 4
+//    stuff bits) and CRC delimiter … IFS (13 bits); at the data rate ESI, DLC and the
+//    payload (5 + 8n bits, up to ⌈(5 + 8n)/4⌉ stuff bits), the stuff count (4) and CRC
+//    (17 bits up to 16 bytes, 21 above) with their fixed stuff bits (1 + ⌊(3 + crc)/4⌋).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "mjc/app/can_node.h"
+
+namespace mjc::host {
+
+struct BusTiming {
+  bool fd = true;
+  double nominal_bps = 1e6;
+  double data_bps = 5e6;  // FD data phase (bit-rate switching); ignored for classical
+};
+
+// Worst-case duration of one frame with `payload_bytes` (classical: 0..8; FD: a legal
+// FD length) on `timing`, seconds.
+double FrameTimeS(int payload_bytes, const BusTiming& timing);
+
+struct BusLoadLine {
+  std::string message;
+  int payload_bytes = 0;
+  double hz_per_board = 0;
+  double load_fraction = 0;  // of the bus, all boards together
+};
+
+struct BusLoad {
+  std::vector<BusLoadLine> lines;
+  double total_fraction = 0;
+};
+
+// The load of `boards` boards transmitting at `rates` (the board's own telemetry
+// schedule), plus the host's heartbeat and setpoint stream at `host_hz` per board.
+BusLoad ComputeBusLoad(const app::CanNodeConfig& rates, int boards,
+                       const BusTiming& timing, double setpoint_hz);
+
+// The highest rate of the 8-byte angle telemetry (the 1 kHz frame) that keeps `boards`
+// boards' total load at or below `budget` with the other rates as given; 0 if even the
+// rest does not fit.
+double MaxTelemetryHz(app::CanNodeConfig rates, int boards, const BusTiming& timing,
+                      double budget);
+
+std::string FormatBusLoad(const BusLoad& load, const BusTiming& timing, int boards);
+
+}  // namespace mjc::host

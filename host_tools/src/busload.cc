@@ -1,0 +1,78 @@
+#include "mjc/host/busload.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace mjc::host {
+
+double FrameTimeS(int n, const BusTiming& t) {
+  if (!t.fd) {
+    const int bits = 47 + 8 * n + (34 + 8 * n - 1) / 4;
+    return bits / t.nominal_bps;
+  }
+  const int nominal_bits = 17 + 4 + 13;
+  const int crc = n <= 16 ? 17 : 21;
+  const int payload = 5 + 8 * n;
+  const int data_bits = payload + (payload + 3) / 4 + 4 + crc + 1 + (3 + crc) / 4;
+  return nominal_bits / t.nominal_bps + data_bits / t.data_bps;
+}
+
+BusLoad ComputeBusLoad(const app::CanNodeConfig& r, int boards, const BusTiming& t,
+                       double setpoint_hz) {
+  BusLoad load;
+  auto add = [&](const char* name, int bytes, double hz) {
+    BusLoadLine line{name, bytes, hz, hz * boards * FrameTimeS(bytes, t)};
+    load.total_fraction += line.load_fraction;
+    load.lines.push_back(line);
+  };
+  add("TelemetryAngles", 8, r.angles_hz);
+  add("TelemetryTorque", 8, r.torque_hz);
+  add("TelemetryPower", 8, r.power_hz);
+  add("TelemetryEnergy", 8, r.energy_hz);
+  add("TelemetryControl", 8, r.control_hz);
+  add("Heartbeat", 8, r.heartbeat_hz);
+  // Window summaries: five frames per window, two windows per cycle, at most 2 Hz
+  // cycles in the paper's protocols.
+  add("Window* (5 frames, 4 windows/s)", 8, 20.0);
+  add("Setpoint (host)", 6, setpoint_hz);
+  add("HostHeartbeat (host)", 1, 10.0);
+  return load;
+}
+
+double MaxTelemetryHz(app::CanNodeConfig rates, int boards, const BusTiming& timing,
+                      double budget) {
+  rates.angles_hz = 0;
+  const double rest = ComputeBusLoad(rates, boards, timing, 0).total_fraction;
+  if (rest >= budget) return 0;
+  return (budget - rest) / (boards * FrameTimeS(8, timing));
+}
+
+std::string FormatBusLoad(const BusLoad& load, const BusTiming& t, int boards) {
+  char line[160];
+  std::string out;
+  if (t.fd) {
+    std::snprintf(line, sizeof line,
+                  "CAN FD %.0f/%.0f kbit/s, %d boards, worst-case stuffing\n",
+                  t.nominal_bps / 1e3, t.data_bps / 1e3, boards);
+  } else {
+    std::snprintf(line, sizeof line,
+                  "classical CAN %.0f kbit/s, %d boards, worst-case stuffing\n",
+                  t.nominal_bps / 1e3, boards);
+  }
+  out += line;
+  std::snprintf(line, sizeof line, "  %-34s %5s %9s %10s %8s\n", "message", "bytes",
+                "Hz/board", "frame (us)", "load");
+  out += line;
+  for (const auto& l : load.lines) {
+    std::snprintf(line, sizeof line, "  %-34s %5d %9.0f %10.1f %7.2f%%\n",
+                  l.message.c_str(), l.payload_bytes, l.hz_per_board,
+                  FrameTimeS(l.payload_bytes, t) * 1e6, 100.0 * l.load_fraction);
+    out += line;
+  }
+  std::snprintf(line, sizeof line, "  %-34s %5s %9s %10s %7.2f%%\n", "total", "", "", "",
+                100.0 * load.total_fraction);
+  out += line;
+  return out;
+}
+
+}  // namespace mjc::host

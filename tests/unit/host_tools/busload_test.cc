@@ -1,0 +1,46 @@
+// Bus-load arithmetic against known worst cases (classical CAN: 135 bits for 8 data
+// bytes and 55 for none, the standard stuffing bound) and the CAN FD frame format.
+#include "mjc/host/busload.h"
+
+#include <gtest/gtest.h>
+
+namespace {
+
+using namespace mjc;
+using host::BusTiming;
+using host::FrameTimeS;
+
+TEST(BusLoad, ClassicalWorstCaseMatchesTheStandardBound) {
+  const BusTiming classic{false, 1e6, 1e6};
+  EXPECT_NEAR(FrameTimeS(8, classic), 135e-6, 1e-12);
+  EXPECT_NEAR(FrameTimeS(0, classic), 55e-6, 1e-12);
+  EXPECT_NEAR(FrameTimeS(1, classic), 65e-6, 1e-12);  // 47 + 8 + ⌊41/4⌋
+}
+
+TEST(BusLoad, FdFrameFollowsTheFormat) {
+  const BusTiming fd{true, 1e6, 5e6};
+  // 8 bytes: 34 nominal bits; data 69 + 18 stuff + 4 + 17 CRC + 6 fixed = 114.
+  EXPECT_NEAR(FrameTimeS(8, fd), 34e-6 + 114 / 5e6, 1e-12);
+  // Above 16 bytes the CRC is 21 bits with one more fixed stuff bit.
+  const double step16 = FrameTimeS(20, fd) - FrameTimeS(16, fd);
+  EXPECT_NEAR(step16, (32 + 8 + 4 + 1) / 5e6, 1e-12);
+  // Bit-rate switching pays: the same 8 bytes take under half the classical time.
+  EXPECT_LT(FrameTimeS(8, fd), 0.5 * FrameTimeS(8, BusTiming{false, 1e6, 1e6}));
+}
+
+TEST(BusLoad, DefaultRatesFitTheBudgetOnFdNotOnClassical) {
+  const app::CanNodeConfig defaults;
+  const auto fd = host::ComputeBusLoad(defaults, 8, BusTiming{true, 1e6, 5e6}, 0);
+  const auto classic = host::ComputeBusLoad(defaults, 8, BusTiming{false, 1e6, 1e6}, 0);
+  EXPECT_LE(fd.total_fraction, 0.5);
+  EXPECT_GT(classic.total_fraction, 1.0);  // 8 boards × 1 kHz do not fit 1 Mbit/s
+  // The highest telemetry rate within the budget puts the load exactly at it.
+  app::CanNodeConfig r = defaults;
+  const double hz = host::MaxTelemetryHz(defaults, 8, BusTiming{false, 1e6, 1e6}, 0.5);
+  r.angles_hz = 0;
+  const double rest =
+      host::ComputeBusLoad(r, 8, BusTiming{false, 1e6, 1e6}, 0).total_fraction;
+  EXPECT_NEAR(rest + hz * 8 * FrameTimeS(8, BusTiming{false, 1e6, 1e6}), 0.5, 1e-12);
+}
+
+}  // namespace
