@@ -1,0 +1,142 @@
+// The host's CAN links. The tools program against CanLink; SocketCanLink talks to a
+// Linux CAN interface (real adapters, vcan, vxcan) through raw CAN FD sockets, and
+// InProcessBus connects links inside one process for unit tests. IsoTpLink moves
+// multi-frame payloads (calibration records) through the kernel's CAN_ISOTP.
+//
+// Errors never throw: Open returns nullptr and Send/Receive return false or nullopt,
+// each with a reason in `why` naming the interface and the system's message.
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "mjc/protocol/can_frame.h"
+
+namespace mjc::host {
+
+struct ReceivedFrame {
+  protocol::CanFrame frame;
+  double timestamp_s = 0;  // kernel receive time (SO_TIMESTAMP), CLOCK_REALTIME seconds
+};
+
+struct LinkStats {
+  std::uint64_t sent = 0;
+  std::uint64_t received = 0;
+  std::uint64_t error_frames = 0;  // CAN error frames seen (controller, bus errors)
+  std::uint64_t bus_off = 0;       // of those, bus-off reports
+  std::uint64_t tx_retries = 0;    // sends retried after ENOBUFS / EAGAIN
+  std::uint64_t tx_failed = 0;     // sends given up on
+  std::uint64_t rx_dropped = 0;    // frames the kernel dropped for this socket
+                                   // (receive buffer full; SO_RXQ_OVFL)
+};
+
+struct IdFilter {
+  std::uint32_t id = 0;
+  std::uint32_t mask = 0;  // a frame passes when (frame.id & mask) == (id & mask)
+};
+
+class CanLink {
+ public:
+  virtual ~CanLink() = default;
+
+  // Queues one frame for transmission. Waits (bounded) when the interface's queue is
+  // full; false with the reason when it stays full or the interface is down.
+  bool Send(const protocol::CanFrame& frame, std::string* why) {
+    return DoSend(frame, why);
+  }
+
+  // The next data frame that passes the filters, waiting up to timeout_ms (0: only what
+  // is already there); nullopt on timeout or error (then *why says which, when given).
+  std::optional<ReceivedFrame> Receive(int timeout_ms, std::string* why = nullptr) {
+    return DoReceive(timeout_ms, why);
+  }
+
+  // Only frames matching one of the filters are received (empty: everything).
+  bool SetFilters(std::span<const IdFilter> filters, std::string* why) {
+    return DoSetFilters(filters, why);
+  }
+
+  const LinkStats& stats() const { return stats_; }
+  // True after a bus-off error frame, until the next successful receive of data.
+  bool bus_off() const { return bus_off_; }
+
+ protected:
+  LinkStats stats_;
+  bool bus_off_ = false;
+
+ private:
+  virtual bool DoSend(const protocol::CanFrame& frame, std::string* why) = 0;
+  virtual std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string* why) = 0;
+  virtual bool DoSetFilters(std::span<const IdFilter> filters, std::string* why) = 0;
+};
+
+class SocketCanLink final : public CanLink {
+ public:
+  // Opens a raw socket on `interface` with CAN FD frames, error frames, kernel
+  // timestamps and non-blocking I/O. nullptr with the reason when the interface does
+  // not exist, the kernel has no CAN support, or permissions are missing.
+  static std::unique_ptr<SocketCanLink> Open(const std::string& interface,
+                                             std::string* why);
+  ~SocketCanLink() override;
+  SocketCanLink(const SocketCanLink&) = delete;
+  SocketCanLink& operator=(const SocketCanLink&) = delete;
+
+  // Also receive the frames this socket sends (off by default, as on the kernel).
+  bool ReceiveOwn(bool on, std::string* why);
+
+ private:
+  SocketCanLink(int fd, std::string interface)
+      : fd_(fd), interface_(std::move(interface)) {}
+  bool DoSend(const protocol::CanFrame& frame, std::string* why) override;
+  std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string* why) override;
+  bool DoSetFilters(std::span<const IdFilter> filters, std::string* why) override;
+
+  int fd_;
+  std::string interface_;
+};
+
+// Links that deliver each sent frame to every other link of the same bus, in order.
+class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
+ public:
+  static std::shared_ptr<InProcessBus> Create() {
+    return std::shared_ptr<InProcessBus>(new InProcessBus);
+  }
+  std::unique_ptr<CanLink> Connect();
+
+ private:
+  InProcessBus() = default;
+  friend class InProcessLink;
+  std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::vector<class InProcessLink*> links_;
+};
+
+// ISO 15765-2 transport through the kernel (CAN_ISOTP): payloads up to 4095 bytes
+// between `tx_id` (what this side sends on) and `rx_id` (what it listens to).
+class IsoTpLink {
+ public:
+  static std::unique_ptr<IsoTpLink> Open(const std::string& interface,
+                                         std::uint32_t tx_id, std::uint32_t rx_id,
+                                         std::string* why);
+  ~IsoTpLink();
+  IsoTpLink(const IsoTpLink&) = delete;
+  IsoTpLink& operator=(const IsoTpLink&) = delete;
+
+  bool Send(std::span<const std::uint8_t> payload, std::string* why);
+  std::optional<std::vector<std::uint8_t>> Receive(int timeout_ms, std::string* why);
+
+ private:
+  explicit IsoTpLink(int fd, std::string interface)
+      : fd_(fd), interface_(std::move(interface)) {}
+  int fd_;
+  std::string interface_;
+};
+
+}  // namespace mjc::host

@@ -1,0 +1,340 @@
+#include "mjc/host/can_link.h"
+
+#include <fcntl.h>
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <linux/can/isotp.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+
+namespace mjc::host {
+namespace {
+
+std::string Errno(const std::string& what) { return what + ": " + std::strerror(errno); }
+
+void Say(std::string* why, const std::string& text) {
+  if (why != nullptr) *why = text;
+}
+
+// poll() for one event on fd, up to timeout_ms; false on timeout, with *error set on
+// failure.
+bool WaitFor(int fd, short events, int timeout_ms, bool* error) {
+  pollfd p{fd, events, 0};
+  for (;;) {
+    const int n = ::poll(&p, 1, timeout_ms);
+    if (n < 0 && errno == EINTR) continue;
+    *error = n < 0;
+    return n > 0;
+  }
+}
+
+int OpenSocket(int type, int protocol, const std::string& interface, std::string* why,
+               unsigned* index) {
+  if (interface.empty() || interface.size() >= IFNAMSIZ) {
+    Say(why, "'" + interface + "' is not an interface name");
+    return -1;
+  }
+  const int fd = ::socket(PF_CAN, type | SOCK_NONBLOCK | SOCK_CLOEXEC, protocol);
+  if (fd < 0) {
+    Say(why, Errno("cannot open a CAN socket (does this kernel have CAN support?)"));
+    return -1;
+  }
+  *index = ::if_nametoindex(interface.c_str());
+  if (*index == 0) {
+    Say(why, Errno("no CAN interface '" + interface + "'"));
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+}  // namespace
+
+// --- SocketCAN raw ------------------------------------------------------------------
+
+std::unique_ptr<SocketCanLink> SocketCanLink::Open(const std::string& interface,
+                                                   std::string* why) {
+  unsigned index = 0;
+  const int fd = OpenSocket(SOCK_RAW, CAN_RAW, interface, why, &index);
+  if (fd < 0) return nullptr;
+  const int on = 1;
+  const can_err_mask_t errors = CAN_ERR_MASK;
+  if (::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof on) < 0 ||
+      ::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors) < 0 ||
+      ::setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof on) < 0 ||
+      ::setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on) < 0) {
+    Say(why, Errno("cannot set up the socket on '" + interface + "'"));
+    ::close(fd);
+    return nullptr;
+  }
+  // Eight boards at full rate are ~9,000 frames/s: 4 MB holds seconds of them while
+  // the tool is busy (the kernel default, ~200 KB, holds about 0.2 s). Without
+  // CAP_NET_ADMIN SO_RCVBUFFORCE fails and SO_RCVBUF is capped at rmem_max; either way
+  // every frame the kernel still drops is counted (SO_RXQ_OVFL).
+  const int buffer = 4 << 20;
+  if (::setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &buffer, sizeof buffer) < 0) {
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &buffer, sizeof buffer);
+  }
+  sockaddr_can address{};
+  address.can_family = AF_CAN;
+  address.can_ifindex = static_cast<int>(index);
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) < 0) {
+    Say(why, Errno("cannot bind to '" + interface + "'"));
+    ::close(fd);
+    return nullptr;
+  }
+  return std::unique_ptr<SocketCanLink>(new SocketCanLink(fd, interface));
+}
+
+SocketCanLink::~SocketCanLink() { ::close(fd_); }
+
+bool SocketCanLink::ReceiveOwn(bool on, std::string* why) {
+  const int value = on ? 1 : 0;
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &value, sizeof value) < 0) {
+    Say(why, Errno("'" + interface_ + "': CAN_RAW_RECV_OWN_MSGS"));
+    return false;
+  }
+  return true;
+}
+
+bool SocketCanLink::DoSend(const protocol::CanFrame& frame, std::string* why) {
+  canfd_frame raw{};
+  raw.can_id = frame.id & CAN_SFF_MASK;
+  raw.len = frame.length;
+  std::memcpy(raw.data, frame.data.data(),
+              std::min<std::size_t>(frame.length, CANFD_MAX_DLEN));
+  const std::size_t size = frame.fd ? CANFD_MTU : CAN_MTU;
+  if (frame.fd) raw.flags = CANFD_BRS;
+  // A full transmit queue (ENOBUFS on CAN: the qdisc is full; EAGAIN on a
+  // non-blocking socket) drains in frame times: wait for room, a bounded number of
+  // times, rather than dropping.
+  constexpr int kAttempts = 50;
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+    const ssize_t n = ::write(fd_, &raw, size);
+    if (n == static_cast<ssize_t>(size)) {
+      ++stats_.sent;
+      return true;
+    }
+    if (n < 0 && (errno == ENOBUFS || errno == EAGAIN)) {
+      ++stats_.tx_retries;
+      bool error = false;
+      WaitFor(fd_, POLLOUT, 2, &error);  // ENOBUFS does not raise POLLOUT: also a pause
+      continue;
+    }
+    ++stats_.tx_failed;
+    Say(why, Errno("cannot send on '" + interface_ + "'"));
+    return false;
+  }
+  ++stats_.tx_failed;
+  Say(why, "'" + interface_ + "': transmit queue stayed full (ENOBUFS) for 100 ms");
+  return false;
+}
+
+std::optional<ReceivedFrame> SocketCanLink::DoReceive(int timeout_ms, std::string* why) {
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  for (;;) {
+    canfd_frame raw{};
+    iovec io{&raw, sizeof raw};
+    alignas(cmsghdr) char
+        control[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(std::uint32_t))];
+    msghdr message{};
+    message.msg_iov = &io;
+    message.msg_iovlen = 1;
+    message.msg_control = control;
+    message.msg_controllen = sizeof control;
+    const ssize_t n = ::recvmsg(fd_, &message, 0);
+    if (n < 0) {
+      if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+        Say(why, Errno("cannot receive on '" + interface_ + "'"));
+        return std::nullopt;
+      }
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+                            deadline - std::chrono::steady_clock::now())
+                            .count();
+      if (left <= 0) return std::nullopt;
+      bool error = false;
+      if (!WaitFor(fd_, POLLIN, static_cast<int>(left), &error)) {
+        if (error) Say(why, Errno("poll on '" + interface_ + "'"));
+        if (error) return std::nullopt;
+      }
+      continue;
+    }
+    if (raw.can_id & CAN_ERR_FLAG) {
+      ++stats_.error_frames;
+      if (raw.can_id & CAN_ERR_BUSOFF) {
+        ++stats_.bus_off;
+        bus_off_ = true;
+      }
+      continue;
+    }
+    if (raw.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG)) continue;  // not our protocol's
+    ReceivedFrame out;
+    out.frame.id = raw.can_id & CAN_SFF_MASK;
+    out.frame.length = raw.len;
+    out.frame.fd = n == static_cast<ssize_t>(CANFD_MTU);
+    std::memcpy(out.frame.data.data(), raw.data, std::min<std::size_t>(raw.len, 64));
+    for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr;
+         c = CMSG_NXTHDR(&message, c)) {
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_TIMESTAMP) {
+        timeval tv{};
+        std::memcpy(&tv, CMSG_DATA(c), sizeof tv);
+        out.timestamp_s =
+            static_cast<double>(tv.tv_sec) + static_cast<double>(tv.tv_usec) * 1e-6;
+      } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+        std::uint32_t dropped = 0;  // the socket's cumulative drop count
+        std::memcpy(&dropped, CMSG_DATA(c), sizeof dropped);
+        stats_.rx_dropped = dropped;
+      }
+    }
+    ++stats_.received;
+    bus_off_ = false;
+    return out;
+  }
+}
+
+bool SocketCanLink::DoSetFilters(std::span<const IdFilter> filters, std::string* why) {
+  std::vector<can_filter> raw;
+  for (const IdFilter& f : filters)
+    raw.push_back({f.id, f.mask | CAN_EFF_FLAG | CAN_RTR_FLAG});
+  // On SocketCAN an empty filter list receives nothing; ours means everything: the
+  // kernel's own default, one filter with a zero mask.
+  if (raw.empty()) raw.push_back({0, 0});
+  const auto size = static_cast<socklen_t>(raw.size() * sizeof(can_filter));
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, raw.data(), size) < 0) {
+    Say(why, Errno("'" + interface_ + "': CAN_RAW_FILTER"));
+    return false;
+  }
+  return true;
+}
+
+// --- in-process bus -----------------------------------------------------------------
+
+class InProcessLink final : public CanLink {
+ public:
+  explicit InProcessLink(std::shared_ptr<InProcessBus> bus) : bus_(std::move(bus)) {
+    std::lock_guard lock(bus_->mutex_);
+    bus_->links_.push_back(this);
+  }
+  ~InProcessLink() override {
+    std::lock_guard lock(bus_->mutex_);
+    std::erase(bus_->links_, this);
+  }
+
+ private:
+  bool Passes(const protocol::CanFrame& f) const {
+    if (filters_.empty()) return true;
+    return std::any_of(filters_.begin(), filters_.end(), [&](const IdFilter& x) {
+      return (f.id & x.mask) == (x.id & x.mask);
+    });
+  }
+  bool DoSend(const protocol::CanFrame& frame, std::string*) override {
+    std::lock_guard lock(bus_->mutex_);
+    const double now =
+        std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+            .count();
+    for (InProcessLink* other : bus_->links_) {
+      if (other != this && other->Passes(frame)) other->queue_.push_back({frame, now});
+    }
+    ++stats_.sent;
+    bus_->arrived_.notify_all();
+    return true;
+  }
+  std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string*) override {
+    std::unique_lock lock(bus_->mutex_);
+    bus_->arrived_.wait_for(lock, std::chrono::milliseconds(timeout_ms),
+                            [this] { return !queue_.empty(); });
+    if (queue_.empty()) return std::nullopt;
+    ReceivedFrame f = queue_.front();
+    queue_.pop_front();
+    ++stats_.received;
+    return f;
+  }
+  bool DoSetFilters(std::span<const IdFilter> filters, std::string*) override {
+    std::lock_guard lock(bus_->mutex_);
+    filters_.assign(filters.begin(), filters.end());
+    return true;
+  }
+
+  std::shared_ptr<InProcessBus> bus_;
+  std::deque<ReceivedFrame> queue_;
+  std::vector<IdFilter> filters_;
+};
+
+std::unique_ptr<CanLink> InProcessBus::Connect() {
+  return std::make_unique<InProcessLink>(shared_from_this());
+}
+
+// --- ISO-TP -------------------------------------------------------------------------
+
+std::unique_ptr<IsoTpLink> IsoTpLink::Open(const std::string& interface,
+                                           std::uint32_t tx_id, std::uint32_t rx_id,
+                                           std::string* why) {
+  unsigned index = 0;
+  const int fd = OpenSocket(SOCK_DGRAM, CAN_ISOTP, interface, why, &index);
+  if (fd < 0) return nullptr;
+  sockaddr_can address{};
+  address.can_family = AF_CAN;
+  address.can_ifindex = static_cast<int>(index);
+  address.can_addr.tp.tx_id = tx_id & CAN_SFF_MASK;
+  address.can_addr.tp.rx_id = rx_id & CAN_SFF_MASK;
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) < 0) {
+    Say(why, Errno("cannot bind ISO-TP on '" + interface + "' (is can-isotp loaded?)"));
+    ::close(fd);
+    return nullptr;
+  }
+  return std::unique_ptr<IsoTpLink>(new IsoTpLink(fd, interface));
+}
+
+IsoTpLink::~IsoTpLink() { ::close(fd_); }
+
+bool IsoTpLink::Send(std::span<const std::uint8_t> payload, std::string* why) {
+  if (payload.empty() || payload.size() > 4095) {
+    Say(why, "ISO-TP payloads are 1..4095 bytes, not " + std::to_string(payload.size()));
+    return false;
+  }
+  bool error = false;
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    const ssize_t n = ::write(fd_, payload.data(), payload.size());
+    if (n == static_cast<ssize_t>(payload.size())) return true;
+    if (n < 0 && (errno == EAGAIN || errno == EBUSY)) {
+      WaitFor(fd_, POLLOUT, 10, &error);
+      continue;
+    }
+    Say(why, Errno("ISO-TP send on '" + interface_ + "'"));
+    return false;
+  }
+  Say(why, "ISO-TP send on '" + interface_ + "': the previous transfer did not finish");
+  return false;
+}
+
+std::optional<std::vector<std::uint8_t>> IsoTpLink::Receive(int timeout_ms,
+                                                            std::string* why) {
+  bool error = false;
+  if (!WaitFor(fd_, POLLIN, timeout_ms, &error)) {
+    Say(why, error ? Errno("ISO-TP poll on '" + interface_ + "'")
+                   : "no ISO-TP reply on '" + interface_ + "' within " +
+                         std::to_string(timeout_ms) + " ms");
+    return std::nullopt;
+  }
+  std::vector<std::uint8_t> buffer(4096);
+  const ssize_t n = ::read(fd_, buffer.data(), buffer.size());
+  if (n < 0) {
+    Say(why, Errno("ISO-TP receive on '" + interface_ + "'"));
+    return std::nullopt;
+  }
+  buffer.resize(static_cast<std::size_t>(n));
+  return buffer;
+}
+
+}  // namespace mjc::host
