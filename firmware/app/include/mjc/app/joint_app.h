@@ -63,8 +63,8 @@ struct AppEvent {
 
 class JointApp {
  public:
-  // Starts idle and uncalibrated with `config` (which must validate; its backlash is
-  // the placeholder until a calibration is set).
+  // Starts idle and uncalibrated with `config` (which must validate). Its backlash
+  // offsets serve only until SetCalibration(): trials are refused before that.
   explicit JointApp(const ControlConfig& config);
 
   // --- main-loop context -----------------------------------------------------------
