@@ -1,5 +1,7 @@
 #include "mjc/app/can_node.h"
 
+#include <algorithm>
+
 namespace mjc::app {
 namespace {
 
@@ -19,7 +21,54 @@ static_assert(static_cast<int>(AppState::kFault) == static_cast<int>(BoardState:
 }  // namespace
 
 CanNode::CanNode(JointApp* app, const CanNodeConfig& config)
-    : app_(app), config_(config) {}
+    : app_(app),
+      config_(config),
+      isotp_(MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), config.node)) {}
+
+std::uint32_t CanNode::NowMs() const {
+  return now_ / std::max<std::uint32_t>(1, app_->control().config().tick_hz / 1000);
+}
+
+void CanNode::ReplyCalibration(CalibrationResult result, std::uint8_t detail) {
+  const std::uint8_t data[2] = {static_cast<std::uint8_t>(result), detail};
+  const CanFrame reply = MakeSingleFrame(
+      MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), config_.node), data);
+  if (!tx_.ISR_Push(reply)) ++counters_.tx_dropped;
+}
+
+void CanNode::HandleIsoTp(const CanFrame& frame) {
+  CanFrame flow;
+  const IsoTpEvent event = isotp_.Handle(frame, NowMs(), &flow);
+  if (flow.length != 0 && !tx_.ISR_Push(flow)) ++counters_.tx_dropped;
+  if (event == IsoTpEvent::kNone) return;
+  if (event != IsoTpEvent::kComplete) {
+    ++counters_.isotp_errors;
+    if (event != IsoTpEvent::kMalformed) {
+      ReplyCalibration(CalibrationResult::kReassemblyError,
+                       static_cast<std::uint8_t>(event));
+    }
+    return;
+  }
+  CalibrationRecord record;
+  std::uint8_t detail = 0;
+  CalibrationResult result = DecodeCalibration(isotp_.payload(), &record, &detail);
+  if (result == CalibrationResult::kAccepted) {
+    const CommandOutcome o = app_->SetCalibration(record.backlash, record.sea_stiffness,
+                                                  record.joint_zero_count);
+    if (o.result == CommandResult::kRefusedNotIdle)
+      result = CalibrationResult::kRefusedNotIdle;
+    if (o.result == CommandResult::kRefusedInvalid) {
+      result = CalibrationResult::kOutOfRange;
+      detail = o.detail;
+    }
+  }
+  if (result == CalibrationResult::kAccepted) {
+    ++counters_.calibrations_accepted;
+  } else {
+    ++counters_.calibrations_refused;
+  }
+  ReplyCalibration(result, detail);
+}
 
 template <class M>
 void CanNode::Send(const M& message) {
@@ -78,6 +127,10 @@ void CanNode::HandleFrame(const CanFrame& frame) {
       if (count(Decode(frame, &w))) HandleParam(w.id, true, w.value);
       return;
     }
+    case Function::kIsoTpToBoard:
+      ++counters_.handled;
+      HandleIsoTp(frame);
+      return;
     case Function::kHostHeartbeat: {
       HostHeartbeat h;
       count(Decode(frame, &h));
@@ -311,6 +364,11 @@ void CanNode::Poll() {
   now_ = r.telemetry.tick;
   AppEvent e;
   while (app_->PopEvent(&e)) SendEvent(e);
+  if (isotp_.Poll(NowMs()) == IsoTpEvent::kTimeout) {
+    ++counters_.isotp_errors;
+    ReplyCalibration(CalibrationResult::kReassemblyError,
+                     static_cast<std::uint8_t>(IsoTpEvent::kTimeout));
+  }
 
   if (streaming_) {
     const std::uint32_t timeout_ticks =

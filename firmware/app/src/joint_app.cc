@@ -26,6 +26,24 @@ CommandOutcome JointApp::SetCalibration(const BacklashConfig& backlash) {
   Command c;
   c.kind = CommandKind::kSetCalibration;
   c.config.backlash = backlash;  // merged into the running config in the tick
+  c.full_calibration = false;
+  return Submit(c);
+}
+
+CommandOutcome JointApp::SetCalibration(const BacklashConfig& backlash,
+                                        Stiffness sea_stiffness,
+                                        std::uint16_t joint_zero_count) {
+  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
+  const BacklashConfigError error = Validate(backlash);
+  if (error != BacklashConfigError::kOk) {
+    return {CommandResult::kRefusedInvalid, static_cast<std::uint8_t>(error)};
+  }
+  Command c;
+  c.kind = CommandKind::kSetCalibration;
+  c.config.backlash = backlash;
+  c.config.sea_stiffness = sea_stiffness;
+  c.config.joint_encoder.zero_offset = joint_zero_count;
+  c.full_calibration = true;
   return Submit(c);
 }
 
@@ -116,9 +134,13 @@ void JointApp::ISR_ApplyCommand() {
     case CommandKind::kSetCalibration: {
       if (!idle) return ISR_Refuse(CommandResult::kRefusedNotIdle);
       if (c.kind == CommandKind::kSetCalibration) {
-        const BacklashConfig backlash = c.config.backlash;
+        const ControlConfig calibration = c.config;
         c.config = control_.config();
-        c.config.backlash = backlash;
+        c.config.backlash = calibration.backlash;
+        if (c.full_calibration) {
+          c.config.sea_stiffness = calibration.sea_stiffness;
+          c.config.joint_encoder.zero_offset = calibration.joint_encoder.zero_offset;
+        }
       }
       const ControlConfigError error = control_.Configure(c.config);
       if (error != ControlConfigError::kOk) {

@@ -16,6 +16,9 @@ void __libc_init_array();
 // -nostartfiles drops crti/crtn; newlib's __libc_init_array still calls these.
 void _init() {}
 void _fini() {}
+// ... and crtbegin, which defines the handle that libstdc++'s static destructors
+// register against (one image, no shared objects: any unique address will do).
+void* __dso_handle = &__dso_handle;
 
 int main();
 [[noreturn]] void Reset_Handler();

@@ -14,7 +14,9 @@
 
 #include "mjc/app/joint_app.h"
 #include "mjc/app/spsc_queue.h"
+#include "mjc/protocol/calibration_record.h"
 #include "mjc/protocol/codec.h"
+#include "mjc/protocol/isotp.h"
 
 namespace mjc::app {
 
@@ -43,6 +45,9 @@ struct CanNodeCounters {
   std::array<std::uint32_t, 6> malformed{};  // by protocol::DecodeError
   std::uint32_t tx_dropped = 0;              // transmit queue full
   std::uint32_t stream_timeouts = 0;
+  std::uint32_t isotp_errors = 0;  // transfers dropped (sequence, timeout, overflow)
+  std::uint32_t calibrations_accepted = 0;
+  std::uint32_t calibrations_refused = 0;
 };
 
 class CanNode {
@@ -69,6 +74,9 @@ class CanNode {
   void HandleCommand(const protocol::Command& c);
   void HandleParam(protocol::ParamId id, bool write, std::int32_t value);
   void SendEvent(const AppEvent& e);
+  void HandleIsoTp(const protocol::CanFrame& frame);
+  void ReplyCalibration(protocol::CalibrationResult result, std::uint8_t detail);
+  std::uint32_t NowMs() const;
   bool Due(std::uint16_t hz, std::uint32_t* next_tick);
 
   JointApp* app_;
@@ -85,6 +93,7 @@ class CanNode {
   std::uint32_t now_ = 0;
   std::uint32_t next_angles_ = 0, next_torque_ = 0, next_power_ = 0, next_energy_ = 0,
                 next_control_ = 0, next_heartbeat_ = 0;
+  protocol::IsoTpReceiver isotp_;
   // Streaming: the tick of the last setpoint; armed while a stream runs.
   bool streaming_ = false;
   std::uint32_t last_setpoint_tick_ = 0;

@@ -70,6 +70,9 @@ class JointApp {
   // --- main-loop context -----------------------------------------------------------
   CommandOutcome Configure(const ControlConfig& config);
   CommandOutcome SetCalibration(const BacklashConfig& backlash);
+  // A whole calibration: backlash, SEA stiffness 2kr_j² and the joint encoder's zero.
+  CommandOutcome SetCalibration(const BacklashConfig& backlash, Stiffness sea_stiffness,
+                                std::uint16_t joint_zero_count);
   CommandOutcome StartTrial(const SineConfig& sine);
   CommandOutcome StartCalibrationSweep(const SweepConfig& sweep);
   // Streamed setpoints: the setpoint moves toward the latest target at most max_rate
@@ -127,6 +130,7 @@ class JointApp {
     SineConfig sine;
     SweepConfig sweep;
     AngularVelocity stream_rate;
+    bool full_calibration = false;
   };
 
   CommandOutcome Submit(const Command& command);
