@@ -1,0 +1,116 @@
+// mjc log: records the bus. candump's log format ("(sec.usec) iface ID#DATA", read by
+// can-utils' log2asc and canplayer, Wireshark and python-can) or a CSV of every decoded
+// signal in physical units (one row a signal).
+#include <chrono>
+#include <cstdio>
+#include <tuple>
+
+#include "commands.h"
+#include "mjc/host/can_link.h"
+#include "mjc/protocol/codec.h"
+
+namespace mjc::cli {
+namespace {
+
+using namespace mjc::protocol;
+
+void WriteCandump(std::FILE* out, const std::string& iface,
+                  const host::ReceivedFrame& r) {
+  const auto sec = static_cast<long long>(r.timestamp_s);
+  const auto usec =
+      static_cast<long long>((r.timestamp_s - static_cast<double>(sec)) * 1e6);
+  std::fprintf(out, "(%010lld.%06lld) %s %03X%s", sec, usec, iface.c_str(), r.frame.id,
+               r.frame.fd ? "##0" : "#");
+  for (int i = 0; i < r.frame.length; ++i)
+    std::fprintf(out, "%02X", r.frame.data[static_cast<std::size_t>(i)]);
+  std::fputc('\n', out);
+}
+
+template <class M>
+bool WriteSignals(std::FILE* out, const host::ReceivedFrame& r) {
+  if (FunctionOf(r.frame.id) != static_cast<std::uint8_t>(Message<M>::kFunction))
+    return false;
+  M m;
+  if (Decode(r.frame, &m) != DecodeError::kOk) {
+    std::fprintf(out, "%.6f,%03X,%u,%s,malformed,\n", r.timestamp_s, r.frame.id,
+                 NodeOf(r.frame.id), Message<M>::kName);
+    return true;
+  }
+  std::apply(
+      [&](const auto&... s) {
+        ((std::fprintf(
+             out, "%.6f,%03X,%u,%s,%s,%.12g\n", r.timestamp_s, r.frame.id,
+             NodeOf(r.frame.id), Message<M>::kName, s.name,
+             static_cast<double>(std::decay_t<decltype(s)>::Wire::ToRaw(m.*(s.member))) *
+                 s.factor())),
+         ...);
+      },
+      Message<M>::kSignals);
+  return true;
+}
+
+void WriteCsv(std::FILE* out, const host::ReceivedFrame& r) {
+  bool known = false;
+  std::apply(
+      [&](auto... m) { ((known = known || WriteSignals<decltype(m)>(out, r)), ...); },
+      AllMessages{});
+  if (!known) {
+    std::fprintf(out, "%.6f,%03X,%u,other,length,%u\n", r.timestamp_s, r.frame.id,
+                 NodeOf(r.frame.id), r.frame.length);
+  }
+}
+
+}  // namespace
+
+void AddLog(CLI::App& app, int* status) {
+  auto* cmd =
+      app.add_subcommand("log", "Record the bus (candump log format or decoded CSV)");
+  static std::string iface = "vcan0", format = "candump", out_path;
+  static double seconds = 0;
+  static long frames = 0;
+  cmd->add_option("--iface", iface, "CAN interface")->capture_default_str();
+  cmd->add_option("--format", format, "candump or csv")
+      ->check(CLI::IsMember({"candump", "csv"}))
+      ->capture_default_str();
+  cmd->add_option("--out", out_path, "Output file (default: stdout)");
+  cmd->add_option("--seconds", seconds, "Stop after this long (0: no limit)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--frames", frames, "Stop after this many frames (0: no limit)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->callback([status] {
+    std::string why;
+    auto link = host::SocketCanLink::Open(iface, &why);
+    if (!link) {
+      std::fprintf(stderr, "mjc log: %s\n", why.c_str());
+      *status = 1;
+      return;
+    }
+    std::FILE* out = out_path.empty() ? stdout : std::fopen(out_path.c_str(), "w");
+    if (out == nullptr) {
+      std::fprintf(stderr, "mjc log: cannot write %s\n", out_path.c_str());
+      *status = 1;
+      return;
+    }
+    if (format == "csv") std::fputs("time_s,id,node,message,signal,value\n", out);
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    long written = 0;
+    while ((frames == 0 || written < frames) &&
+           (seconds == 0 || std::chrono::steady_clock::now() < deadline)) {
+      const auto r = link->Receive(100, &why);
+      if (!r) continue;
+      if (format == "csv") {
+        WriteCsv(out, *r);
+      } else {
+        WriteCandump(out, iface, *r);
+      }
+      ++written;
+    }
+    if (out != stdout) std::fclose(out);
+    std::fprintf(stderr, "mjc log: %ld frames, %llu dropped by the kernel\n", written,
+                 static_cast<unsigned long long>(link->stats().rx_dropped));
+    *status = 0;
+  });
+}
+
+}  // namespace mjc::cli

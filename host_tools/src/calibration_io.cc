@@ -1,0 +1,135 @@
+#include "mjc/host/calibration_io.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "mjc/host/can_link.h"
+#include "mjc/protocol/can_frame.h"
+#include "mjc/protocol/messages.h"
+
+namespace mjc::host {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+}  // namespace
+
+nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& r) {
+  return {{"c_right_deg", r.backlash.c_right.ToDouble() / kDeg},
+          {"c_left_deg", r.backlash.c_left.ToDouble() / kDeg},
+          {"alpha", r.backlash.alpha.ToDouble()},
+          {"sea_stiffness_Nm_per_rad", r.sea_stiffness.ToDouble()},
+          {"joint_zero_count", r.joint_zero_count},
+          {"fit_rms_urad", r.fit_rms_urad},
+          {"fit_lag_us", r.fit_lag_us},
+          {"fitted_at_unix_s", r.fitted_at_unix_s}};
+}
+
+std::optional<protocol::CalibrationRecord> CalibrationFromJson(const nlohmann::json& j,
+                                                               std::string* why) {
+  protocol::CalibrationRecord r;
+  auto number = [&](const char* key, double* out) {
+    if (!j.contains(key) || !j[key].is_number()) {
+      *why = std::string("calibration: field '") + key + "' missing or not a number";
+      return false;
+    }
+    *out = j[key].get<double>();
+    if (!std::isfinite(*out)) {
+      *why = std::string("calibration: field '") + key + "' is not finite";
+      return false;
+    }
+    return true;
+  };
+  double c_right = 0, c_left = 0, alpha = 0, stiffness = 0, zero = 0;
+  if (!number("c_right_deg", &c_right) || !number("c_left_deg", &c_left) ||
+      !number("alpha", &alpha) || !number("sea_stiffness_Nm_per_rad", &stiffness) ||
+      !number("joint_zero_count", &zero)) {
+    return std::nullopt;
+  }
+  r.backlash.c_right = Angle::Quantize(c_right * kDeg);
+  r.backlash.c_left = Angle::Quantize(c_left * kDeg);
+  r.backlash.alpha = Scale::Quantize(alpha);
+  r.sea_stiffness = Stiffness::Quantize(stiffness);
+  if (zero < 0 || zero > 16383 || zero != std::floor(zero)) {
+    *why = "calibration: joint_zero_count must be an integer in 0..16383";
+    return std::nullopt;
+  }
+  r.joint_zero_count = static_cast<std::uint16_t>(zero);
+  r.fit_rms_urad = j.value("fit_rms_urad", 0u);
+  r.fit_lag_us = j.value("fit_lag_us", 0u);
+  r.fitted_at_unix_s = j.value("fitted_at_unix_s", std::uint64_t{0});
+  // The board's checks, run here first, so a bad file never reaches the bus.
+  const auto bytes = protocol::EncodeCalibration(r);
+  protocol::CalibrationRecord checked;
+  std::uint8_t detail = 0;
+  const auto result = protocol::DecodeCalibration(bytes, &checked, &detail);
+  if (result != protocol::CalibrationResult::kAccepted) {
+    *why = "calibration refused: " + DescribeCalibrationResult(result, detail);
+    return std::nullopt;
+  }
+  return checked;
+}
+
+std::string DescribeCalibrationResult(protocol::CalibrationResult result,
+                                      std::uint8_t detail) {
+  using R = protocol::CalibrationResult;
+  switch (result) {
+    case R::kAccepted:
+      return "accepted";
+    case R::kWrongSize:
+      return "wrong record size";
+    case R::kBadMagic:
+      return "not a calibration record";
+    case R::kUnsupportedVersion:
+      return "unsupported record version";
+    case R::kBadCrc:
+      return "bad CRC (corrupted in transit)";
+    case R::kRefusedNotIdle:
+      return "the board is not idle";
+    case R::kReassemblyError:
+      return "ISO-TP transfer failed (" + std::to_string(detail) + ")";
+    case R::kOutOfRange:
+      switch (detail) {
+        case 1:
+          return "alpha outside (0, 8)";
+        case 2:
+          return "an offset outside ±28.6° (0.5 rad)";
+        case 3:
+          return "c_left above c_right";
+        case 100:
+          return "SEA stiffness outside (0, 100] N·m/rad";
+        case 101:
+          return "joint zero count outside 0..16383";
+        default:
+          return "a value out of range (" + std::to_string(detail) + ")";
+      }
+  }
+  return "unknown result " + std::to_string(static_cast<int>(result));
+}
+
+std::optional<UploadOutcome> UploadCalibration(const std::string& iface, int node,
+                                               const protocol::CalibrationRecord& record,
+                                               int timeout_ms, std::string* why) {
+  using protocol::Function;
+  const auto n = static_cast<std::uint8_t>(node);
+  auto link = IsoTpLink::Open(
+      iface, protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpToBoard), n),
+      protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), n), why);
+  if (!link) return std::nullopt;
+  UploadOutcome out;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto bytes = protocol::EncodeCalibration(record);
+  if (!link->Send(bytes, why))
+    return out;  // not answered: the send failed (no flow control)
+  const auto reply = link->Receive(timeout_ms, why);
+  out.elapsed_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+          .count();
+  if (!reply || reply->size() != 2) return out;
+  out.answered = true;
+  out.result = static_cast<protocol::CalibrationResult>((*reply)[0]);
+  out.detail = (*reply)[1];
+  return out;
+}
+
+}  // namespace mjc::host
