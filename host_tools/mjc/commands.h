@@ -11,5 +11,6 @@ void AddLog(CLI::App& app, int* status);
 void AddCal(CLI::App& app, int* status);
 void AddCalibrate(CLI::App& app, int* status);
 void AddBusload(CLI::App& app, int* status);
+void AddTrial(CLI::App& app, int* status);
 
 }  // namespace mjc::cli

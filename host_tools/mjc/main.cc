@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   mjc::cli::AddCal(app, &status);
   mjc::cli::AddCalibrate(app, &status);
   mjc::cli::AddBusload(app, &status);
+  mjc::cli::AddTrial(app, &status);
   CLI11_PARSE(app, argc, argv);
   return status;
 }

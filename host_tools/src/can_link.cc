@@ -252,8 +252,10 @@ class InProcessLink final : public CanLink {
   }
   std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string*) override {
     std::unique_lock lock(bus_->mutex_);
-    bus_->arrived_.wait_for(lock, std::chrono::milliseconds(timeout_ms),
-                            [this] { return !queue_.empty(); });
+    if (timeout_ms > 0) {  // a zero timeout only looks: no timed wait, no syscall
+      bus_->arrived_.wait_for(lock, std::chrono::milliseconds(timeout_ms),
+                              [this] { return !queue_.empty(); });
+    }
     if (queue_.empty()) return std::nullopt;
     ReceivedFrame f = queue_.front();
     queue_.pop_front();

@@ -23,6 +23,9 @@ check() {  # check <description> <command...>
 
 "$mjc" sim --iface vcan0 --node 1 --speed 4 --seconds 120 2>"$work/sim.err" &
 sim=$!
+# A second board, with a subject's hand donned, for the trial.
+"$mjc" sim --iface vcan0 --node 2 --subject subject1 --speed 4 --seconds 120 2>"$work/sim2.err" &
+sim2=$!
 "$mjc" log --iface vcan0 --seconds 4 --out "$work/bus.log" 2>"$work/log.err" &
 logger=$!
 sleep 0.5
@@ -36,6 +39,13 @@ echo "fitted c_r $r°, c_l $l° (plant 1.1001°, -0.8995°)"
 check "fitted offsets within 0.1° of the plant's" \
   awk -v r="$r" -v l="$l" 'BEGIN { exit !(r != "" && l != "" && (r - 1.1001)^2 < 0.01 && (l + 0.8995)^2 < 0.01) }'
 check "mjc cal show reads the saved calibration" "$mjc" cal show "$work/cal.json"
+check "mjc cal upload calibrates node 2 with node 1's file" \
+  "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 2
+check "mjc trial runs the amplitude protocol on node 2" \
+  "$mjc" trial --iface vcan0 --node 2 --protocol amplitude --amplitudes 15 --reps 3 \
+  --frequency-hz 2 --rest-s 0.2 --out "$work/trial"
+check "every window of the trial reached the host (3 flexions, 3 extensions)" \
+  sh -c "test \$(grep -c ',flexion,' '$work/trial/windows.csv') -eq 3 && test \$(grep -c ',extension,' '$work/trial/windows.csv') -eq 3"
 
 wait "$logger"
 check "mjc log wrote candump lines" grep -qE '^\([0-9]+\.[0-9]{6}\) vcan0 [0-9A-F]{3}#' "$work/bus.log"
@@ -60,8 +70,8 @@ check "a missing interface is reported" \
   sh -c "! '$mjc' log --iface nosuch0 --seconds 1 2>'$work/noif.err' && grep -q nosuch0 '$work/noif.err'"
 check "a bad flag is reported, exit non-zero" sh -c "! '$mjc' sim --node 9 2>/dev/null"
 
-kill "$sim" 2>/dev/null
-wait "$sim" 2>/dev/null
+kill "$sim" "$sim2" 2>/dev/null
+wait "$sim" "$sim2" 2>/dev/null
 check "mjc sim accounted for every frame (no malformed)" grep -q 'malformed 0' "$work/sim.err"
 
 if [ "$failed" -ne 0 ]; then

@@ -1,0 +1,169 @@
+// mjc trial: the paper's protocols against a board on the bus. "repeatability": N
+// trials of five repetitions at one amplitude (--pause waits for Enter between trials,
+// to re-don); "amplitude": five repetitions at each amplitude. The board estimates and
+// integrates; this reports the middle three flexions of every trial: tables on stdout,
+// every window in windows.csv, a figure (gnuplot) in the output folder.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "mjc/host/report.h"
+#include "mjc/host/trial_runner.h"
+
+namespace mjc::cli {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+}  // namespace
+
+void AddTrial(CLI::App& app, int* status) {
+  auto* cmd =
+      app.add_subcommand("trial", "Run the paper's repeatability or amplitude protocol");
+  static std::string iface = "vcan0", protocol_name = "repeatability",
+                     out_dir = "out/trial";
+  static int node = 1, trials = 5, reps = 5;
+  static double amplitude_deg = 25, frequency_hz = 0.5, rest_s = 1.5;
+  static std::vector<double> amplitudes = {6, 8, 11, 15, 20, 25};
+  static bool pause = false;
+  cmd->add_option("--iface", iface, "CAN interface")->capture_default_str();
+  cmd->add_option("--node", node, "Node id")
+      ->check(CLI::Range(1, 8))
+      ->capture_default_str();
+  cmd->add_option("--protocol", protocol_name, "repeatability or amplitude")
+      ->check(CLI::IsMember({"repeatability", "amplitude"}))
+      ->capture_default_str();
+  cmd->add_option("--trials", trials, "Repeatability: number of trials")
+      ->check(CLI::Range(1, 50))
+      ->capture_default_str();
+  cmd->add_option("--reps", reps, "Repetitions per trial")
+      ->check(CLI::Range(3, 50))
+      ->capture_default_str();
+  cmd->add_option("--amplitude-deg", amplitude_deg, "Repeatability: amplitude")
+      ->check(CLI::Range(1.0, 90.0))
+      ->capture_default_str();
+  cmd->add_option("--amplitudes", amplitudes, "Amplitude protocol: amplitudes (deg)")
+      ->check(CLI::Range(1.0, 90.0))
+      ->capture_default_str();
+  cmd->add_option("--frequency-hz", frequency_hz, "Sine frequency")
+      ->check(CLI::Range(0.05, 5.0))
+      ->capture_default_str();
+  cmd->add_option("--rest-s", rest_s, "Rest before and after each trial")
+      ->check(CLI::Range(0.0, 25.0))
+      ->capture_default_str();
+  cmd->add_flag("--pause", pause, "Wait for Enter between trials (re-donning)");
+  cmd->add_option("--out", out_dir, "Output folder")->capture_default_str();
+  cmd->callback([status] {
+    std::string why;
+    auto link = host::SocketCanLink::Open(iface, &why);
+    if (!link) {
+      std::fprintf(stderr, "mjc trial: %s\n", why.c_str());
+      *status = 1;
+      return;
+    }
+    std::filesystem::create_directories(out_dir);
+    host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
+    const bool repeatability = protocol_name == "repeatability";
+    const std::vector<double> plan =
+        repeatability
+            ? std::vector<double>(static_cast<std::size_t>(trials), amplitude_deg)
+            : amplitudes;
+    host::CsvTable csv({"trial", "amplitude_deg", "motion", "repetition", "eta_pct",
+                        "loading_J", "unloading_J", "net_J", "peak_power_W",
+                        "peak_torque_Nm"});
+    std::vector<std::vector<host::BoardWindow>> analysed;
+    for (std::size_t t = 0; t < plan.size(); ++t) {
+      if (pause && t > 0) {
+        std::fprintf(stderr, "re-don, then press Enter for trial %zu/%zu\n", t + 1,
+                     plan.size());
+        std::string line;
+        std::getline(std::cin, line);
+      }
+      protocol::TrialConfig config;
+      config.amplitude = Angle::Quantize(plan[t] * kDeg);
+      config.frequency_mHz = static_cast<std::uint16_t>(std::lround(frequency_hz * 1000));
+      config.repetitions = static_cast<std::uint8_t>(reps);
+      config.rest_100ms = static_cast<std::uint8_t>(std::lround(rest_s * 10));
+      const double timeout = (2 * rest_s + reps / frequency_hz) * 3 + 10;
+      const auto trial = host::RunBoardTrial(
+          board, config,
+          [&](const host::BoardWindow& w) {
+            std::fprintf(stderr, "\r[trial %zu/%zu, %.0f°] repetition %u/%d %s   ", t + 1,
+                         plan.size(), plan[t], w.repetition + 1, reps,
+                         w.motion == Motion::kFlexion ? "flexion" : "extension");
+          },
+          timeout);
+      std::fputc('\n', stderr);
+      if (!trial.completed) {
+        std::fprintf(stderr, "mjc trial: node %d: %s\n", node, trial.error.c_str());
+        *status = 3;
+        return;
+      }
+      for (const auto& w : trial.windows) {
+        csv.AddRow(
+            {std::to_string(t + 1), host::CsvTable::Number(plan[t]),
+             w.motion == Motion::kFlexion ? "flexion" : "extension",
+             std::to_string(w.repetition), host::CsvTable::Number(w.eta_percent),
+             host::CsvTable::Number(w.loading_J), host::CsvTable::Number(w.unloading_J),
+             host::CsvTable::Number(w.net_J()), host::CsvTable::Number(w.peak_power_W),
+             host::CsvTable::Number(w.peak_torque_Nm)});
+      }
+      analysed.push_back(
+          host::MiddleFlexions(trial.windows, static_cast<std::uint16_t>(reps)));
+    }
+    csv.Write(std::filesystem::path(out_dir) / "windows.csv");
+
+    // Tables: the middle three flexions of each trial.
+    std::vector<double> all;
+    if (repeatability) {
+      std::printf("| trial | η mean | η std |\n|---|---|---|\n");
+    } else {
+      std::printf(
+          "| amplitude | loading (mJ) | unloading (mJ) | net (mJ) | η "
+          "|\n|---|---|---|---|---|\n");
+    }
+    for (std::size_t t = 0; t < analysed.size(); ++t) {
+      std::vector<double> eta, load, unload, net;
+      for (const auto& w : analysed[t]) {
+        eta.push_back(w.eta_percent);
+        load.push_back(w.loading_J * 1e3);
+        unload.push_back(w.unloading_J * 1e3);
+        net.push_back(w.net_J() * 1e3);
+        all.push_back(w.eta_percent);
+      }
+      const auto e = host::Describe(eta);
+      if (repeatability) {
+        std::printf("| %zu | %.2f%% | %.3f%% |\n", t + 1, e.mean, e.std);
+      } else {
+        const auto l = host::Describe(load), u = host::Describe(unload),
+                   n = host::Describe(net);
+        std::printf("| %.0f° | %.3f ± %.3f | %.3f ± %.3f | %.3f ± %.3f | %.1f%% |\n",
+                    plan[t], l.mean, l.se, u.mean, u.se, n.mean, n.se, e.mean);
+      }
+    }
+    if (repeatability) {
+      const auto e = host::Describe(all);
+      std::printf("| overall | %.2f%% | %.3f%% |\n", e.mean, e.std);
+    }
+    // A figure of η per flexion, by trial.
+    const auto script = std::filesystem::path(out_dir) / "eta.gp";
+    std::ofstream(script)
+        << "set terminal pngcairo size 900,600\nset output 'eta.png'\n"
+           "set datafile separator ','\nset grid\nset xlabel 'trial'\n"
+           "set ylabel 'energy loss η (%)'\n"
+           "plot 'windows.csv' every ::1 using 1:(strcol(3) eq 'flexion' ? $5 : 1/0) "
+           "with points pt 7 title 'flexion windows'\n";
+    if (!host::RunGnuplot(script, &why))
+      std::fprintf(stderr, "mjc trial: %s\n", why.c_str());
+    std::printf("windows: %s/windows.csv, figure: %s/eta.png\n", out_dir.c_str(),
+                out_dir.c_str());
+    *status = 0;
+  });
+}
+
+}  // namespace mjc::cli
