@@ -8,7 +8,7 @@
 namespace mjc::cli {
 
 void AddCal(CLI::App& app, int* status) {
-  auto* cal = app.add_subcommand("cal", "Show or upload a calibration file");
+  auto* cal = app.add_subcommand("cal", "Show, upload or download a calibration");
   cal->require_subcommand(1);
   static std::string file, iface = "vcan0";
   static int node = 1, timeout_ms = 1000;
@@ -43,6 +43,30 @@ void AddCal(CLI::App& app, int* status) {
       return;
     }
     std::printf("%s\n", host::CalibrationToJson(*r).dump(2).c_str());
+    *status = 0;
+  });
+
+  auto* download = cal->add_subcommand("download", "Read a board's calibration back");
+  download->add_option("--iface", iface, "CAN interface")->capture_default_str();
+  download->add_option("--node", node, "Node id")
+      ->check(CLI::Range(1, 8))
+      ->capture_default_str();
+  static std::string out;
+  download->add_option("--out", out, "Write it to this file (default: print)");
+  download->callback([status] {
+    std::string why;
+    const auto r = host::DownloadCalibration(iface, node, &why);
+    if (!r) {
+      std::fprintf(stderr, "mjc cal download: %s\n", why.c_str());
+      *status = 3;
+      return;
+    }
+    const std::string text = host::CalibrationToJson(*r).dump(2);
+    if (out.empty()) {
+      std::printf("%s\n", text.c_str());
+    } else {
+      std::ofstream(out) << text << '\n';
+    }
     *status = 0;
   });
 

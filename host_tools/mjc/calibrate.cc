@@ -145,8 +145,12 @@ void AddCalibrate(CLI::App& app, int* status) {
         "fit over %zu samples: c_r %.4f°, c_l %.4f°, lag %.2f ms, rms %.4f°, %.1f ms\n",
         motor.size(), fit.c_right_rad / kDeg, fit.c_left_rad / kDeg, fit.lag_s * 1e3,
         fit.rms_error_rad / kDeg, fit.elapsed_ms);
-    std::ofstream(out_path) << host::CalibrationToJson(record).dump(2) << '\n';
+    const auto persist = [&record] {
+      std::ofstream(out_path) << host::CalibrationToJson(record).dump(2) << '\n';
+    };
     if (!upload) {
+      persist();
+      std::printf("saved %s (not uploaded)\n", out_path.c_str());
       *status = 0;
       return;
     }
@@ -161,8 +165,22 @@ void AddCalibrate(CLI::App& app, int* status) {
           host::DescribeCalibrationResult(outcome->result, outcome->detail).c_str());
       *status = 4;
     } else {
-      std::printf("node %d calibrated (upload %.1f ms); saved %s\n", node,
-                  outcome->elapsed_ms, out_path.c_str());
+      // Read back: the board must hold exactly what was sent.
+      const auto back = host::DownloadCalibration(iface, node, &why);
+      const bool same = back && back->backlash.c_right == record.backlash.c_right &&
+                        back->backlash.c_left == record.backlash.c_left &&
+                        back->backlash.alpha == record.backlash.alpha &&
+                        back->sea_stiffness == record.sea_stiffness &&
+                        back->joint_zero_count == record.joint_zero_count;
+      if (!same) {
+        std::fprintf(stderr, "mjc calibrate: node %d read back %s\n", node,
+                     back ? "a different calibration" : why.c_str());
+        *status = 6;
+        return;
+      }
+      persist();
+      std::printf("node %d calibrated (upload %.1f ms, read back identical); saved %s\n",
+                  node, outcome->elapsed_ms, out_path.c_str());
       *status = 0;
     }
   });

@@ -30,6 +30,29 @@ std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int tim
   return std::nullopt;
 }
 
+std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
+                                                   std::string* why) {
+  last_param_.reset();
+  if (!link_->Send(Encode(ParamRead{id}, node_), why)) return std::nullopt;
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (std::chrono::steady_clock::now() < deadline) {
+    Poll(10);
+    if (last_param_ && last_param_->id == id) {
+      if (last_param_->status != ParamStatus::kOk) {
+        *why = "node " + std::to_string(node_) + " answered parameter " +
+               std::to_string(static_cast<int>(id)) + " with status " +
+               std::to_string(static_cast<int>(last_param_->status));
+        return std::nullopt;
+      }
+      return last_param_->value;
+    }
+  }
+  *why = "node " + std::to_string(node_) + " did not answer a parameter read within " +
+         std::to_string(timeout_ms) + " ms";
+  return std::nullopt;
+}
+
 bool BoardClient::SendTrialConfig(const TrialConfig& config, std::string* why) {
   return link_->Send(Encode(config, node_), why);
 }
@@ -60,6 +83,11 @@ void BoardClient::Handle(const CanFrame& f) {
     case Function::kCommandResult: {
       protocol::CommandResult r;
       if (ok(Decode(f, &r))) last_result_ = r;
+      return;
+    }
+    case Function::kParamValue: {
+      ParamValue v;
+      if (ok(Decode(f, &v))) last_param_ = v;
       return;
     }
     case Function::kHeartbeat: {

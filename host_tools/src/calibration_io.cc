@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "mjc/host/board_client.h"
 #include "mjc/host/can_link.h"
 #include "mjc/protocol/can_frame.h"
 #include "mjc/protocol/messages.h"
@@ -130,6 +131,34 @@ std::optional<UploadOutcome> UploadCalibration(const std::string& iface, int nod
   out.result = static_cast<protocol::CalibrationResult>((*reply)[0]);
   out.detail = (*reply)[1];
   return out;
+}
+
+std::optional<protocol::CalibrationRecord> DownloadCalibration(const std::string& iface,
+                                                               int node,
+                                                               std::string* why) {
+  using protocol::ParamId;
+  auto link = SocketCanLink::Open(iface, why);
+  if (!link) return std::nullopt;
+  BoardClient board(link.get(), static_cast<std::uint8_t>(node));
+  const auto calibrated = board.ReadParam(ParamId::kCalibrated, 500, why);
+  if (!calibrated) return std::nullopt;
+  if (*calibrated != 1) {
+    *why = "node " + std::to_string(node) + " is not calibrated";
+    return std::nullopt;
+  }
+  protocol::CalibrationRecord r;
+  const auto right = board.ReadParam(ParamId::kCalibrationRight, 500, why);
+  const auto left = board.ReadParam(ParamId::kCalibrationLeft, 500, why);
+  const auto alpha = board.ReadParam(ParamId::kCalibrationAlpha, 500, why);
+  const auto stiffness = board.ReadParam(ParamId::kCalibrationStiffness, 500, why);
+  const auto zero = board.ReadParam(ParamId::kCalibrationJointZero, 500, why);
+  if (!right || !left || !alpha || !stiffness || !zero) return std::nullopt;
+  r.backlash.c_right = Angle::FromRaw(*right);
+  r.backlash.c_left = Angle::FromRaw(*left);
+  r.backlash.alpha = Scale::FromRaw(*alpha);
+  r.sea_stiffness = Stiffness::FromRaw(*stiffness);
+  r.joint_zero_count = static_cast<std::uint16_t>(*zero);
+  return r;
 }
 
 }  // namespace mjc::host

@@ -41,6 +41,8 @@ check "fitted offsets within 0.1° of the plant's" \
 check "mjc cal show reads the saved calibration" "$mjc" cal show "$work/cal.json"
 check "mjc cal upload calibrates node 2 with node 1's file" \
   "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 2
+check "mjc cal download reads node 2's calibration back" \
+  sh -c "'$mjc' cal download --iface vcan0 --node 2 --out '$work/back.json' && grep -q c_right_deg '$work/back.json'"
 check "mjc trial runs the amplitude protocol on node 2" \
   "$mjc" trial --iface vcan0 --node 2 --protocol amplitude --amplitudes 15 --reps 3 \
   --frequency-hz 2 --rest-s 0.2 --out "$work/trial"

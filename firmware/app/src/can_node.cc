@@ -260,6 +260,35 @@ void CanNode::HandleParam(ParamId id, bool write, std::int32_t value) {
     case ParamId::kTorqueMax:
       raw = config.supervisor.torque_max.raw();
       break;
+    // The calibration in force: read-only (a calibration is uploaded whole over ISO-TP).
+    case ParamId::kCalibrationRight:
+    case ParamId::kCalibrationLeft:
+    case ParamId::kCalibrationAlpha:
+    case ParamId::kCalibrationStiffness:
+    case ParamId::kCalibrationJointZero:
+    case ParamId::kCalibrated:
+      switch (id) {
+        case ParamId::kCalibrationRight:
+          reply.value = config.backlash.c_right.raw();
+          break;
+        case ParamId::kCalibrationLeft:
+          reply.value = config.backlash.c_left.raw();
+          break;
+        case ParamId::kCalibrationAlpha:
+          reply.value = config.backlash.alpha.raw();
+          break;
+        case ParamId::kCalibrationStiffness:
+          reply.value = config.sea_stiffness.raw();
+          break;
+        case ParamId::kCalibrationJointZero:
+          reply.value = config.joint_encoder.zero_offset;
+          break;
+        default:
+          reply.value = app_->calibrated() ? 1 : 0;
+          break;
+      }
+      if (write) reply.status = ParamStatus::kReadOnly;
+      return Send(reply);
     default:
       reply.status = ParamStatus::kUnknown;
       return Send(reply);

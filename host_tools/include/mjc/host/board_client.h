@@ -46,6 +46,11 @@ class BoardClient {
                                                       int timeout_ms, std::string* why);
   bool SendTrialConfig(const protocol::TrialConfig& config, std::string* why);
 
+  // Reads a parameter: nullopt when the board does not answer, or answers with a status
+  // other than kOk (then *why says which).
+  std::optional<std::int32_t> ReadParam(protocol::ParamId id, int timeout_ms,
+                                        std::string* why);
+
   // Handles what arrives within timeout_ms; true if anything did.
   bool Poll(int timeout_ms);
 
@@ -64,6 +69,7 @@ class BoardClient {
   BoardWindow partial_;
   std::vector<BoardWindow> windows_;
   std::optional<protocol::CommandResult> last_result_;
+  std::optional<protocol::ParamValue> last_param_;
   std::uint64_t malformed_ = 0;
 };
 

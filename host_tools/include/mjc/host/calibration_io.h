@@ -32,6 +32,12 @@ std::optional<UploadOutcome> UploadCalibration(const std::string& iface, int nod
                                                const protocol::CalibrationRecord& record,
                                                int timeout_ms, std::string* why);
 
+// Reads the calibration in force back from a board (its read-only calibration
+// parameters); nullopt with the reason when it does not answer or is uncalibrated.
+std::optional<protocol::CalibrationRecord> DownloadCalibration(const std::string& iface,
+                                                               int node,
+                                                               std::string* why);
+
 // "accepted", "refused: bad CRC", … for messages.
 std::string DescribeCalibrationResult(protocol::CalibrationResult result,
                                       std::uint8_t detail);

@@ -128,6 +128,13 @@ enum class ParamId : std::uint16_t {
   kPositionKff = 0x0203,  // Q16, duty per rad/s
   kVelocityWindow = 0x0210,
   kTorqueMax = 0x0300,  // Q24 N·m
+  // The calibration in force, read-only (uploads go over ISO-TP as a whole record).
+  kCalibrationRight = 0x0400,      // c_r, Q24 rad
+  kCalibrationLeft = 0x0401,       // c_l, Q24 rad
+  kCalibrationAlpha = 0x0402,      // α, Q28
+  kCalibrationStiffness = 0x0403,  // 2kr_j², Q24 N·m/rad
+  kCalibrationJointZero = 0x0404,  // joint encoder zero count
+  kCalibrated = 0x0405,            // 1 once a calibration was accepted
 };
 constexpr bool ValidEnumValue(ParamId id) {
   switch (id) {
@@ -144,6 +151,12 @@ constexpr bool ValidEnumValue(ParamId id) {
     case ParamId::kPositionKff:
     case ParamId::kVelocityWindow:
     case ParamId::kTorqueMax:
+    case ParamId::kCalibrationRight:
+    case ParamId::kCalibrationLeft:
+    case ParamId::kCalibrationAlpha:
+    case ParamId::kCalibrationStiffness:
+    case ParamId::kCalibrationJointZero:
+    case ParamId::kCalibrated:
       return true;
   }
   return false;
@@ -154,8 +167,9 @@ enum class ParamStatus : std::uint8_t {
   kUnknown = 1,
   kOutOfRange = 2,
   kRefusedNotIdle = 3,
+  kReadOnly = 4,
 };
-constexpr bool ValidEnumValue(ParamStatus s) { return static_cast<std::uint8_t>(s) <= 3; }
+constexpr bool ValidEnumValue(ParamStatus s) { return static_cast<std::uint8_t>(s) <= 4; }
 
 // Energies travel in Q7.24 J (±128 J, 0.06 µJ): a window's energy is millijoules.
 using WireEnergy = Fixed<Joule, 24>;
