@@ -1,7 +1,9 @@
 // mjc log: records the bus. candump's log format ("(sec.usec) iface ID#DATA", read by
 // can-utils' log2asc and canplayer, Wireshark and python-can) or a CSV of every decoded
 // signal in physical units (one row a signal).
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <tuple>
 
@@ -13,6 +15,9 @@ namespace mjc::cli {
 namespace {
 
 using namespace mjc::protocol;
+
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop = true; }
 
 void WriteCandump(std::FILE* out, const std::string& iface,
                   const host::ReceivedFrame& r) {
@@ -95,7 +100,11 @@ void AddLog(CLI::App& app, int* status) {
     const auto deadline =
         std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     long written = 0;
-    while ((frames == 0 || written < frames) &&
+    // SIGINT/SIGTERM end the recording cleanly: the file is flushed and the counts
+    // printed, so a stopped logger loses nothing it received.
+    std::signal(SIGINT, OnSignal);
+    std::signal(SIGTERM, OnSignal);
+    while (!g_stop && (frames == 0 || written < frames) &&
            (seconds == 0 || std::chrono::steady_clock::now() < deadline)) {
       const auto r = link->Receive(100, &why);
       if (!r) continue;

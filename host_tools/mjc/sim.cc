@@ -96,9 +96,11 @@ void AddSim(CLI::App& app, int* status) {
     const auto& c = can.counters();
     std::fprintf(
         stderr,
-        "mjc sim: %.1f s simulated; frames handled %u, ignored %u, malformed %u, "
-        "tx dropped %u\n",
-        static_cast<double>(ticks) * period, c.handled, c.ignored,
+        "mjc sim: %.1f s simulated; frames sent %llu (send failures %llu), handled %u, "
+        "ignored %u, malformed %u, tx dropped %u\n",
+        static_cast<double>(ticks) * period,
+        static_cast<unsigned long long>(link->stats().sent),
+        static_cast<unsigned long long>(link->stats().tx_failed), c.handled, c.ignored,
         c.malformed[1] + c.malformed[2] + c.malformed[3] + c.malformed[4] +
             c.malformed[5],
         c.tx_dropped);
