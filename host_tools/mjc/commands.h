@@ -12,5 +12,7 @@ void AddCal(CLI::App& app, int* status);
 void AddCalibrate(CLI::App& app, int* status);
 void AddBusload(CLI::App& app, int* status);
 void AddTrial(CLI::App& app, int* status);
+void AddReport(CLI::App& app, int* status);
+void AddMonitor(CLI::App& app, int* status);
 
 }  // namespace mjc::cli

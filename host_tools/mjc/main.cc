@@ -15,6 +15,8 @@ int main(int argc, char** argv) {
   mjc::cli::AddCalibrate(app, &status);
   mjc::cli::AddBusload(app, &status);
   mjc::cli::AddTrial(app, &status);
+  mjc::cli::AddReport(app, &status);
+  mjc::cli::AddMonitor(app, &status);
   CLI11_PARSE(app, argc, argv);
   return status;
 }

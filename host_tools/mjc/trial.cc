@@ -6,13 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
 
 #include "commands.h"
-#include "mjc/host/report.h"
+#include "mjc/host/trial_report.h"
 #include "mjc/host/trial_runner.h"
 
 namespace mjc::cli {
@@ -73,10 +72,7 @@ void AddTrial(CLI::App& app, int* status) {
         repeatability
             ? std::vector<double>(static_cast<std::size_t>(trials), amplitude_deg)
             : amplitudes;
-    host::CsvTable csv({"trial", "amplitude_deg", "motion", "repetition", "eta_pct",
-                        "loading_J", "unloading_J", "net_J", "peak_power_W",
-                        "peak_torque_Nm"});
-    std::vector<std::vector<host::BoardWindow>> analysed;
+    std::vector<host::TrialWindows> runs;
     for (std::size_t t = 0; t < plan.size(); ++t) {
       if (pause && t > 0) {
         std::fprintf(stderr, "re-don, then press Enter for trial %zu/%zu\n", t + 1,
@@ -104,61 +100,13 @@ void AddTrial(CLI::App& app, int* status) {
         *status = 3;
         return;
       }
-      for (const auto& w : trial.windows) {
-        csv.AddRow(
-            {std::to_string(t + 1), host::CsvTable::Number(plan[t]),
-             w.motion == Motion::kFlexion ? "flexion" : "extension",
-             std::to_string(w.repetition), host::CsvTable::Number(w.eta_percent),
-             host::CsvTable::Number(w.loading_J), host::CsvTable::Number(w.unloading_J),
-             host::CsvTable::Number(w.net_J()), host::CsvTable::Number(w.peak_power_W),
-             host::CsvTable::Number(w.peak_torque_Nm)});
-      }
-      analysed.push_back(
-          host::MiddleFlexions(trial.windows, static_cast<std::uint16_t>(reps)));
+      runs.push_back({plan[t], trial.windows});
     }
-    csv.Write(std::filesystem::path(out_dir) / "windows.csv");
-
-    // Tables: the middle three flexions of each trial.
-    std::vector<double> all;
-    if (repeatability) {
-      std::printf("| trial | η mean | η std |\n|---|---|---|\n");
-    } else {
-      std::printf(
-          "| amplitude | loading (mJ) | unloading (mJ) | net (mJ) | η "
-          "|\n|---|---|---|---|---|\n");
-    }
-    for (std::size_t t = 0; t < analysed.size(); ++t) {
-      std::vector<double> eta, load, unload, net;
-      for (const auto& w : analysed[t]) {
-        eta.push_back(w.eta_percent);
-        load.push_back(w.loading_J * 1e3);
-        unload.push_back(w.unloading_J * 1e3);
-        net.push_back(w.net_J() * 1e3);
-        all.push_back(w.eta_percent);
-      }
-      const auto e = host::Describe(eta);
-      if (repeatability) {
-        std::printf("| %zu | %.2f%% | %.3f%% |\n", t + 1, e.mean, e.std);
-      } else {
-        const auto l = host::Describe(load), u = host::Describe(unload),
-                   n = host::Describe(net);
-        std::printf("| %.0f° | %.3f ± %.3f | %.3f ± %.3f | %.3f ± %.3f | %.1f%% |\n",
-                    plan[t], l.mean, l.se, u.mean, u.se, n.mean, n.se, e.mean);
-      }
-    }
-    if (repeatability) {
-      const auto e = host::Describe(all);
-      std::printf("| overall | %.2f%% | %.3f%% |\n", e.mean, e.std);
-    }
-    // A figure of η per flexion, by trial.
-    const auto script = std::filesystem::path(out_dir) / "eta.gp";
-    std::ofstream(script)
-        << "set terminal pngcairo size 900,600\nset output 'eta.png'\n"
-           "set datafile separator ','\nset grid\nset xlabel 'trial'\n"
-           "set ylabel 'energy loss η (%)'\n"
-           "plot 'windows.csv' every ::1 using 1:(strcol(3) eq 'flexion' ? $5 : 1/0) "
-           "with points pt 7 title 'flexion windows'\n";
-    if (!host::RunGnuplot(script, &why))
+    host::WriteWindowsCsv(runs, out_dir);
+    std::fputs(
+        host::TrialTables(runs, static_cast<std::uint16_t>(reps), repeatability).c_str(),
+        stdout);
+    if (!host::PlotTrials(out_dir, &why))
       std::fprintf(stderr, "mjc trial: %s\n", why.c_str());
     std::printf("windows: %s/windows.csv, figure: %s/eta.png\n", out_dir.c_str(),
                 out_dir.c_str());

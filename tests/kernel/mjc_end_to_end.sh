@@ -46,6 +46,12 @@ check "mjc cal download reads node 2's calibration back" \
 check "mjc trial runs the amplitude protocol on node 2" \
   "$mjc" trial --iface vcan0 --node 2 --protocol amplitude --amplitudes 15 --reps 3 \
   --frequency-hz 2 --rest-s 0.2 --out "$work/trial"
+check "mjc report re-renders the trial's tables from windows.csv" \
+  sh -c "'$mjc' report '$work/trial' --protocol amplitude --reps 3 >'$work/report.out' && grep -q '15°' '$work/report.out' && test -s '$work/trial/report.md'"
+check "mjc monitor shows node 2 live" \
+  sh -c "'$mjc' monitor --iface vcan0 --node 2 --seconds 1 >'$work/monitor.out' && grep -q 'node 2: idle *calibrated' '$work/monitor.out'"
+check "mjc monitor reports an absent node silent, exit 3" \
+  sh -c "'$mjc' monitor --iface vcan0 --node 6 --seconds 2.5 >'$work/silent.out'; test \$? -eq 3 && grep -q 'node 6: silent' '$work/silent.out'"
 check "every window of the trial reached the host (3 flexions, 3 extensions)" \
   sh -c "test \$(grep -c ',flexion,' '$work/trial/windows.csv') -eq 3 && test \$(grep -c ',extension,' '$work/trial/windows.csv') -eq 3"
 
