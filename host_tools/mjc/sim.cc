@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "commands.h"
+#include "hal/sim/sim_flash.h"
 #include "mjc/app/can_node.h"
 #include "mjc/host/can_link.h"
 #include "mjc/plant/params.h"
@@ -24,7 +25,7 @@ void OnSignal(int) { g_stop = true; }
 
 void AddSim(CLI::App& app, int* status) {
   auto* cmd = app.add_subcommand("sim", "Run a simulated joint board on a CAN interface");
-  static std::string iface = "vcan0", robot = "default", subject;
+  static std::string iface = "vcan0", robot = "default", subject, flash_path;
   static int node = 1;
   static double seconds = 0, speed = 1;
   cmd->add_option("--iface", iface, "CAN interface")->capture_default_str();
@@ -38,6 +39,9 @@ void AddSim(CLI::App& app, int* status) {
   cmd->add_option("--seconds", seconds,
                   "Stop after this much simulated time (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option(
+      "--flash", flash_path,
+      "Keep the board's flash (its stored calibration) in this file across runs");
   cmd->add_option("--speed", speed,
                   "Simulated seconds per wall second (0: as fast as possible)")
       ->check(CLI::NonNegativeNumber)
@@ -66,9 +70,20 @@ void AddSim(CLI::App& app, int* status) {
       return;
     }
     sim::SimBoard board(params, sim::DefaultBoardConfig());
+    // Flash: two 2 KB pages for the calibration's A/B records, as on the board.
+    hal::SimFlash flash(2, flash_path, &why);
+    if (!why.empty()) std::fprintf(stderr, "mjc sim: %s\n", why.c_str());
+    app::CalibrationStore store(&flash, 0, 1);
+    if (const auto restored = app::RestoreCalibration(board.app(), store)) {
+      board.Tick();  // applies it
+      std::fprintf(stderr, "mjc sim: restored calibration #%u from flash\n",
+                   restored->sequence);
+    } else {
+      std::fprintf(stderr, "mjc sim: no stored calibration: uncalibrated\n");
+    }
     app::CanNodeConfig node_config;
     node_config.node = static_cast<std::uint8_t>(node);
-    app::CanNode can(&board.app(), node_config);
+    app::CanNode can(&board.app(), node_config, &store);
     std::signal(SIGINT, OnSignal);
     std::signal(SIGTERM, OnSignal);
     std::fprintf(

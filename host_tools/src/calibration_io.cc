@@ -89,6 +89,8 @@ std::string DescribeCalibrationResult(protocol::CalibrationResult result,
       return "the board is not idle";
     case R::kReassemblyError:
       return "ISO-TP transfer failed (" + std::to_string(detail) + ")";
+    case R::kStorageFailed:
+      return "applied, but the board could not store it in flash";
     case R::kOutOfRange:
       switch (detail) {
         case 1:

@@ -78,6 +78,22 @@ check "a missing interface is reported" \
   sh -c "! '$mjc' log --iface nosuch0 --seconds 1 2>'$work/noif.err' && grep -q nosuch0 '$work/noif.err'"
 check "a bad flag is reported, exit non-zero" sh -c "! '$mjc' sim --node 9 2>/dev/null"
 
+# A board with flash keeps its calibration over a restart.
+"$mjc" sim --iface vcan0 --node 3 --flash "$work/node3.flash" --speed 4 --seconds 30 2>"$work/sim3a.err" &
+sim3=$!
+sleep 0.5
+check "node 3 stores an uploaded calibration" "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 3
+kill "$sim3"
+wait "$sim3" 2>/dev/null
+"$mjc" sim --iface vcan0 --node 3 --flash "$work/node3.flash" --speed 4 --seconds 30 2>"$work/sim3b.err" &
+sim3=$!
+sleep 0.5
+check "restarted node 3 restores it from flash" grep -q 'restored calibration #1' "$work/sim3b.err"
+check "and reports it calibrated" \
+  sh -c "'$mjc' cal download --iface vcan0 --node 3 >'$work/back3.json' && grep -q c_right_deg '$work/back3.json'"
+kill "$sim3"
+wait "$sim3" 2>/dev/null
+
 kill "$sim" "$sim2" 2>/dev/null
 wait "$sim" "$sim2" 2>/dev/null
 check "mjc sim accounted for every frame (no malformed)" grep -q 'malformed 0' "$work/sim.err"

@@ -20,10 +20,11 @@ static_assert(static_cast<int>(AppState::kFault) == static_cast<int>(BoardState:
 
 }  // namespace
 
-CanNode::CanNode(JointApp* app, const CanNodeConfig& config)
+CanNode::CanNode(JointApp* app, const CanNodeConfig& config, CalibrationStore* store)
     : app_(app),
       config_(config),
-      isotp_(MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), config.node)) {}
+      isotp_(MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), config.node)),
+      store_(store) {}
 
 std::uint32_t CanNode::NowMs() const {
   return now_ / std::max<std::uint32_t>(1, app_->control().config().tick_hz / 1000);
@@ -60,6 +61,12 @@ void CanNode::HandleIsoTp(const CanFrame& frame) {
     if (o.result == CommandResult::kRefusedInvalid) {
       result = CalibrationResult::kOutOfRange;
       detail = o.detail;
+    }
+    // Accepted while idle, so the bridge is off: keep it over a reset.
+    if (result == CalibrationResult::kAccepted && store_ != nullptr &&
+        store_->Save(record) != StoreResult::kOk) {
+      ++counters_.storage_failures;
+      result = CalibrationResult::kStorageFailed;
     }
   }
   if (result == CalibrationResult::kAccepted) {

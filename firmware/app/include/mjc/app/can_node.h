@@ -12,6 +12,7 @@
 #include <array>
 #include <cstdint>
 
+#include "mjc/app/calibration_store.h"
 #include "mjc/app/joint_app.h"
 #include "mjc/app/spsc_queue.h"
 #include "mjc/protocol/calibration_record.h"
@@ -48,11 +49,13 @@ struct CanNodeCounters {
   std::uint32_t isotp_errors = 0;  // transfers dropped (sequence, timeout, overflow)
   std::uint32_t calibrations_accepted = 0;
   std::uint32_t calibrations_refused = 0;
+  std::uint32_t storage_failures = 0;
 };
 
 class CanNode {
  public:
-  CanNode(JointApp* app, const CanNodeConfig& config);
+  // `store` (may be null: nothing persists) keeps every accepted calibration.
+  CanNode(JointApp* app, const CanNodeConfig& config, CalibrationStore* store = nullptr);
 
   // A frame from the bus.
   void HandleFrame(const protocol::CanFrame& frame);
@@ -94,6 +97,7 @@ class CanNode {
   std::uint32_t next_angles_ = 0, next_torque_ = 0, next_power_ = 0, next_energy_ = 0,
                 next_control_ = 0, next_heartbeat_ = 0;
   protocol::IsoTpReceiver isotp_;
+  CalibrationStore* store_;
   // Streaming: the tick of the last setpoint; armed while a stream runs.
   bool streaming_ = false;
   std::uint32_t last_setpoint_tick_ = 0;

@@ -51,6 +51,7 @@ enum class CalibrationResult : std::uint8_t {
   kOutOfRange = 5,  // detail: the BacklashConfigError, or 100 stiffness, 101 zero count
   kRefusedNotIdle = 6,
   kReassemblyError = 7,  // the ISO-TP transfer itself failed (sequence, timeout)
+  kStorageFailed = 8,    // applied, but writing it to flash failed: not kept over a reset
 };
 
 // CRC-32 (reflected polynomial 0xEDB88320, initial and final XOR 0xFFFFFFFF): the
