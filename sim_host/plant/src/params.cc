@@ -273,7 +273,9 @@ PlantParams ParsePlantParams(std::string_view json_text, std::string_view source
   Json root;
   try {
     root = Json::parse(json_text);
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {
+    // Syntax errors, and numbers a double cannot hold (out_of_range): both are files
+    // the board's parameters cannot come from.
     throw std::runtime_error(std::string(source) + ": not valid JSON: " + e.what());
   }
   if (!root.is_object()) {
