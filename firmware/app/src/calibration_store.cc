@@ -5,28 +5,19 @@
 
 #include "mjc/app/joint_app.h"
 #include "mjc/core/wrapping.h"
+#include "mjc/protocol/little_endian.h"
 
 namespace mjc::app {
-namespace {
-
-void Put(std::uint8_t* p, std::uint64_t v, int bytes) {
-  for (int i = 0; i < bytes; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-std::uint64_t Get(const std::uint8_t* p, int bytes) {
-  std::uint64_t v = 0;
-  for (int i = 0; i < bytes; ++i) v |= static_cast<std::uint64_t>(p[i]) << (8 * i);
-  return v;
-}
-
-}  // namespace
 
 std::optional<CalibrationStore::Loaded> CalibrationStore::ReadPage(
     std::uint32_t page) const {
   std::array<std::uint8_t, kRecordBytes> b{};
   if (flash_->Read(page, 0, b) != hal::FlashResult::kOk) return std::nullopt;
-  if (Get(&b[0], 4) != kMagic || Get(&b[4], 2) != kVersion ||
-      Get(&b[6], 2) != protocol::kCalibrationRecordSize || Get(&b[68], 4) != kCommit ||
-      Get(&b[64], 4) != protocol::Crc32(std::span<const std::uint8_t>(b.data(), 64))) {
+  if (protocol::GetLe(&b[0], 4) != kMagic || protocol::GetLe(&b[4], 2) != kVersion ||
+      protocol::GetLe(&b[6], 2) != protocol::kCalibrationRecordSize ||
+      protocol::GetLe(&b[68], 4) != kCommit ||
+      protocol::GetLe(&b[64], 4) !=
+          protocol::Crc32(std::span<const std::uint8_t>(b.data(), 64))) {
     return std::nullopt;
   }
   Loaded loaded;
@@ -36,7 +27,7 @@ std::optional<CalibrationStore::Loaded> CalibrationStore::ReadPage(
                                   &detail) != protocol::CalibrationResult::kAccepted) {
     return std::nullopt;  // intact but not a calibration the board accepts
   }
-  loaded.sequence = static_cast<std::uint32_t>(Get(&b[8], 4));
+  loaded.sequence = static_cast<std::uint32_t>(protocol::GetLe(&b[8], 4));
   loaded.page = page;
   return loaded;
 }
@@ -56,19 +47,20 @@ StoreResult CalibrationStore::Save(const protocol::CalibrationRecord& record) {
       newest ? WrappingAdd<std::uint32_t>(newest->sequence, 1u) : 1u;
 
   std::array<std::uint8_t, kRecordBytes> b{};
-  Put(&b[0], kMagic, 4);
-  Put(&b[4], kVersion, 2);
-  Put(&b[6], protocol::kCalibrationRecordSize, 2);
-  Put(&b[8], sequence, 4);
+  protocol::PutLe(&b[0], kMagic, 4);
+  protocol::PutLe(&b[4], kVersion, 2);
+  protocol::PutLe(&b[6], protocol::kCalibrationRecordSize, 2);
+  protocol::PutLe(&b[8], sequence, 4);
   const auto payload = protocol::EncodeCalibration(record);
   std::memcpy(&b[16], payload.data(), payload.size());
-  Put(&b[64], protocol::Crc32(std::span<const std::uint8_t>(b.data(), 64)), 4);
-  Put(&b[68], kCommit, 4);
+  protocol::PutLe(&b[64], protocol::Crc32(std::span<const std::uint8_t>(b.data(), 64)),
+                  4);
+  protocol::PutLe(&b[68], kCommit, 4);
 
   if (flash_->ErasePage(target) != hal::FlashResult::kOk) return StoreResult::kFlashError;
   // Header and payload first, the CRC + commit double-word last.
   for (std::uint32_t offset = 0; offset < kRecordBytes; offset += 8) {
-    if (flash_->ProgramDoubleWord(target, offset, Get(&b[offset], 8)) !=
+    if (flash_->ProgramDoubleWord(target, offset, protocol::GetLe(&b[offset], 8)) !=
         hal::FlashResult::kOk) {
       return StoreResult::kFlashError;
     }

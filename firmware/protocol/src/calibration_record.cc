@@ -1,18 +1,12 @@
 #include "mjc/protocol/calibration_record.h"
 
+#include "mjc/protocol/little_endian.h"
+
 namespace mjc::protocol {
 namespace {
 
-void Put(std::uint8_t* p, std::uint64_t v, int bytes) {
-  for (int i = 0; i < bytes; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-std::uint64_t Get(const std::uint8_t* p, int bytes) {
-  std::uint64_t v = 0;
-  for (int i = 0; i < bytes; ++i) v |= static_cast<std::uint64_t>(p[i]) << (8 * i);
-  return v;
-}
 std::int32_t GetI32(const std::uint8_t* p) {
-  return static_cast<std::int32_t>(static_cast<std::uint32_t>(Get(p, 4)));
+  return static_cast<std::int32_t>(static_cast<std::uint32_t>(GetLe(p, 4)));
 }
 
 constexpr std::uint16_t kPayloadLength = 36;
@@ -22,18 +16,18 @@ constexpr std::uint16_t kPayloadLength = 36;
 std::array<std::uint8_t, kCalibrationRecordSize> EncodeCalibration(
     const CalibrationRecord& r) {
   std::array<std::uint8_t, kCalibrationRecordSize> b{};
-  Put(&b[0], kCalibrationMagic, 4);
-  Put(&b[4], kCalibrationVersion, 2);
-  Put(&b[6], kPayloadLength, 2);
-  Put(&b[8], static_cast<std::uint32_t>(r.backlash.c_right.raw()), 4);
-  Put(&b[12], static_cast<std::uint32_t>(r.backlash.c_left.raw()), 4);
-  Put(&b[16], static_cast<std::uint32_t>(r.backlash.alpha.raw()), 4);
-  Put(&b[20], static_cast<std::uint32_t>(r.sea_stiffness.raw()), 4);
-  Put(&b[24], r.joint_zero_count, 2);
-  Put(&b[28], r.fit_rms_urad, 4);
-  Put(&b[32], r.fit_lag_us, 4);
-  Put(&b[36], r.fitted_at_unix_s, 8);
-  Put(&b[44], Crc32(std::span<const std::uint8_t>(b.data(), 44)), 4);
+  PutLe(&b[0], kCalibrationMagic, 4);
+  PutLe(&b[4], kCalibrationVersion, 2);
+  PutLe(&b[6], kPayloadLength, 2);
+  PutLe(&b[8], static_cast<std::uint32_t>(r.backlash.c_right.raw()), 4);
+  PutLe(&b[12], static_cast<std::uint32_t>(r.backlash.c_left.raw()), 4);
+  PutLe(&b[16], static_cast<std::uint32_t>(r.backlash.alpha.raw()), 4);
+  PutLe(&b[20], static_cast<std::uint32_t>(r.sea_stiffness.raw()), 4);
+  PutLe(&b[24], r.joint_zero_count, 2);
+  PutLe(&b[28], r.fit_rms_urad, 4);
+  PutLe(&b[32], r.fit_lag_us, 4);
+  PutLe(&b[36], r.fitted_at_unix_s, 8);
+  PutLe(&b[44], Crc32(std::span<const std::uint8_t>(b.data(), 44)), 4);
   return b;
 }
 
@@ -41,20 +35,20 @@ CalibrationResult DecodeCalibration(std::span<const std::uint8_t> b,
                                     CalibrationRecord* out, std::uint8_t* detail) {
   *detail = 0;
   if (b.size() != kCalibrationRecordSize) return CalibrationResult::kWrongSize;
-  if (Get(&b[0], 4) != kCalibrationMagic) return CalibrationResult::kBadMagic;
-  if (Get(&b[4], 2) != kCalibrationVersion || Get(&b[6], 2) != kPayloadLength) {
+  if (GetLe(&b[0], 4) != kCalibrationMagic) return CalibrationResult::kBadMagic;
+  if (GetLe(&b[4], 2) != kCalibrationVersion || GetLe(&b[6], 2) != kPayloadLength) {
     return CalibrationResult::kUnsupportedVersion;
   }
-  if (Get(&b[44], 4) != Crc32(b.first(44))) return CalibrationResult::kBadCrc;
+  if (GetLe(&b[44], 4) != Crc32(b.first(44))) return CalibrationResult::kBadCrc;
   CalibrationRecord r;
   r.backlash.c_right = Angle::FromRaw(GetI32(&b[8]));
   r.backlash.c_left = Angle::FromRaw(GetI32(&b[12]));
   r.backlash.alpha = Scale::FromRaw(GetI32(&b[16]));
   r.sea_stiffness = Stiffness::FromRaw(GetI32(&b[20]));
-  r.joint_zero_count = static_cast<std::uint16_t>(Get(&b[24], 2));
-  r.fit_rms_urad = static_cast<std::uint32_t>(Get(&b[28], 4));
-  r.fit_lag_us = static_cast<std::uint32_t>(Get(&b[32], 4));
-  r.fitted_at_unix_s = Get(&b[36], 8);
+  r.joint_zero_count = static_cast<std::uint16_t>(GetLe(&b[24], 2));
+  r.fit_rms_urad = static_cast<std::uint32_t>(GetLe(&b[28], 4));
+  r.fit_lag_us = static_cast<std::uint32_t>(GetLe(&b[32], 4));
+  r.fitted_at_unix_s = GetLe(&b[36], 8);
   const BacklashConfigError backlash = Validate(r.backlash);
   if (backlash != BacklashConfigError::kOk) {
     *detail = static_cast<std::uint8_t>(backlash);
