@@ -21,21 +21,8 @@ void AddBusload(CLI::App& app, int* status) {
       ->check(CLI::Range(10.0, 8000.0))
       ->capture_default_str();
   cmd->callback([status] {
-    const app::CanNodeConfig defaults;
-    const host::BusTiming fd{true, nominal_kbps * 1e3, data_kbps * 1e3};
-    const host::BusTiming classic{false, nominal_kbps * 1e3, nominal_kbps * 1e3};
-    std::fputs(
-        host::FormatBusLoad(host::ComputeBusLoad(defaults, boards, fd, 0), fd, boards)
-            .c_str(),
-        stdout);
-    std::fputs(host::FormatBusLoad(host::ComputeBusLoad(defaults, boards, classic, 0),
-                                   classic, boards)
-                   .c_str(),
+    std::fputs(host::BusLoadReport(boards, nominal_kbps * 1e3, data_kbps * 1e3).c_str(),
                stdout);
-    std::printf(
-        "highest angle-telemetry rate within 50%%: FD %.0f Hz, classical %.0f Hz\n",
-        host::MaxTelemetryHz(defaults, boards, fd, 0.5),
-        host::MaxTelemetryHz(defaults, boards, classic, 0.5));
     *status = 0;
   });
 }

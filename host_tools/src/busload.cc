@@ -75,4 +75,19 @@ std::string FormatBusLoad(const BusLoad& load, const BusTiming& t, int boards) {
   return out;
 }
 
+std::string BusLoadReport(int boards, double nominal_bps, double data_bps) {
+  const app::CanNodeConfig defaults;
+  const BusTiming fd{true, nominal_bps, data_bps};
+  const BusTiming classic{false, nominal_bps, nominal_bps};
+  std::string out = FormatBusLoad(ComputeBusLoad(defaults, boards, fd, 0), fd, boards);
+  out += FormatBusLoad(ComputeBusLoad(defaults, boards, classic, 0), classic, boards);
+  char line[120];
+  std::snprintf(
+      line, sizeof line,
+      "highest angle-telemetry rate within 50%%: FD %.0f Hz, classical %.0f Hz\n",
+      MaxTelemetryHz(defaults, boards, fd, 0.5),
+      MaxTelemetryHz(defaults, boards, classic, 0.5));
+  return out + line;
+}
+
 }  // namespace mjc::host

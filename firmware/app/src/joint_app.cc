@@ -17,34 +17,35 @@ CommandOutcome JointApp::Configure(const ControlConfig& config) {
   return Submit(c);
 }
 
-CommandOutcome JointApp::SetCalibration(const BacklashConfig& backlash) {
+// Validated here, merged into the running config in the tick: `full` also takes the
+// SEA stiffness and the joint encoder's zero from `calibration`.
+CommandOutcome JointApp::SubmitCalibration(const ControlConfig& calibration, bool full) {
   if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
-  const BacklashConfigError error = Validate(backlash);
+  const BacklashConfigError error = Validate(calibration.backlash);
   if (error != BacklashConfigError::kOk) {
     return {CommandResult::kRefusedInvalid, static_cast<std::uint8_t>(error)};
   }
   Command c;
   c.kind = CommandKind::kSetCalibration;
-  c.config.backlash = backlash;  // merged into the running config in the tick
-  c.full_calibration = false;
+  c.config = calibration;
+  c.full_calibration = full;
   return Submit(c);
+}
+
+CommandOutcome JointApp::SetCalibration(const BacklashConfig& backlash) {
+  ControlConfig calibration;
+  calibration.backlash = backlash;
+  return SubmitCalibration(calibration, false);
 }
 
 CommandOutcome JointApp::SetCalibration(const BacklashConfig& backlash,
                                         Stiffness sea_stiffness,
                                         std::uint16_t joint_zero_count) {
-  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
-  const BacklashConfigError error = Validate(backlash);
-  if (error != BacklashConfigError::kOk) {
-    return {CommandResult::kRefusedInvalid, static_cast<std::uint8_t>(error)};
-  }
-  Command c;
-  c.kind = CommandKind::kSetCalibration;
-  c.config.backlash = backlash;
-  c.config.sea_stiffness = sea_stiffness;
-  c.config.joint_encoder.zero_offset = joint_zero_count;
-  c.full_calibration = true;
-  return Submit(c);
+  ControlConfig calibration;
+  calibration.backlash = backlash;
+  calibration.sea_stiffness = sea_stiffness;
+  calibration.joint_encoder.zero_offset = joint_zero_count;
+  return SubmitCalibration(calibration, true);
 }
 
 CommandOutcome JointApp::StartTrial(const SineConfig& sine) {

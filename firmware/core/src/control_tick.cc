@@ -97,8 +97,6 @@ void ControlTick::Arm(bool armed) {
   armed_ = armed;
 }
 
-bool ControlTick::ClearFaults() { return supervisor_.Clear(last_input_); }
-
 void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   TickResult& r = *out;
   Telemetry& t = r.telemetry;
@@ -132,7 +130,7 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   energy_.Add(power);
 
   // 5. Supervisor, before any duty is computed.
-  SupervisorInput& in = last_input_;
+  SupervisorInput in;
   in.joint_status = joint_sample.status;
   in.joint_count = joint_count_;
   in.joint = joint_;

@@ -156,8 +156,10 @@ MJC_VECTOR_TEST(ControlTick, CorruptFrameDisablesBridgeInSameTick) {
   VT_EXPECT_TRUE(!later.actuation.bridge_enabled);
   VT_EXPECT_TRUE(later.telemetry.fault == Fault::kJointParity);
   VT_EXPECT_TRUE(later.raised == Fault::kNone);
-  VT_EXPECT_TRUE(tick.ClearFaults());
-  VT_EXPECT_TRUE(StepOf(tick, good).actuation.bridge_enabled);
+  tick.RequestClearFaults();
+  const TickResult cleared = StepOf(tick, good);
+  VT_EXPECT_TRUE(cleared.clear == FaultClear::kCleared);
+  VT_EXPECT_TRUE(cleared.actuation.bridge_enabled);
 }
 
 MJC_VECTOR_TEST(ControlTick, TickOverrunAndTimeoutStopTheMotor) {
@@ -170,10 +172,13 @@ MJC_VECTOR_TEST(ControlTick, TickOverrunAndTimeoutStopTheMotor) {
   s.tick_overrun = true;
   TickResult r = StepOf(tick, s);
   VT_EXPECT_TRUE(r.raised == Fault::kTickOverrun && !r.actuation.bridge_enabled);
-  VT_EXPECT_TRUE(!tick.ClearFaults());  // cause still present in the last sample
+  tick.RequestClearFaults();  // the cause is still in this tick's sample: refused
+  r = StepOf(tick, s);
+  VT_EXPECT_TRUE(r.clear == FaultClear::kRefused && !r.actuation.bridge_enabled);
   s.tick_overrun = false;
-  StepOf(tick, s);
-  VT_EXPECT_TRUE(tick.ClearFaults());
+  tick.RequestClearFaults();  // gone in this tick's sample: cleared in the same tick
+  r = StepOf(tick, s);
+  VT_EXPECT_TRUE(r.clear == FaultClear::kCleared && r.actuation.bridge_enabled);
   s.command_timeout = true;
   r = StepOf(tick, s);
   VT_EXPECT_TRUE(r.raised == Fault::kCommandTimeout && !r.actuation.bridge_enabled);

@@ -53,4 +53,9 @@ double MaxTelemetryHz(app::CanNodeConfig rates, int boards, const BusTiming& tim
 
 std::string FormatBusLoad(const BusLoad& load, const BusTiming& timing, int boards);
 
+// The whole report of `mjc busload`: `boards` boards at the default rates on CAN FD
+// (nominal/data bit rates) and on classical CAN at the nominal rate, and the highest
+// angle-telemetry rate each keeps within a 50 % budget.
+std::string BusLoadReport(int boards, double nominal_bps, double data_bps);
+
 }  // namespace mjc::host

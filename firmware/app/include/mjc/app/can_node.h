@@ -26,7 +26,7 @@ struct CanNodeConfig {
   // Transmit rates, Hz, 0 = off; each at most the tick rate. Defaults: the angles at
   // 1 kHz, the rest at 10 Hz, the heartbeat at 10 Hz — eight boards then load CAN FD
   // 1/5 Mbit/s to 48.5 % with worst-case stuffing, window events and host heartbeats
-  // included (mjc-busload). The energy figures need no more: the board integrates
+  // included (mjc busload). The energy figures need no more: the board integrates
   // every tick and reports exact window totals.
   std::uint16_t angles_hz = 1000;
   std::uint16_t torque_hz = 10;

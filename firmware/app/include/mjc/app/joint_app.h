@@ -134,6 +134,7 @@ class JointApp {
   };
 
   CommandOutcome Submit(const Command& command);
+  CommandOutcome SubmitCalibration(const ControlConfig& calibration, bool full);
   void ISR_ApplyCommand();
   void ISR_FollowStream();
   void ISR_AfterStep();

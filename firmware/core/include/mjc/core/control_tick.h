@@ -122,11 +122,9 @@ class ControlTick {
   void Arm(bool armed);
   bool armed() const { return armed_; }
 
-  // Clears a latched fault if its cause is gone (checked on the last sample).
-  bool ClearFaults();
   // Asks the next ISR_Step to clear a latched fault if that tick's own sample shows the
-  // cause gone; the outcome is in its TickResult::clear. For callers that hand the
-  // request over from another context (the application's command mailbox).
+  // cause gone (judged before any duty is computed); the outcome is in its
+  // TickResult::clear.
   void RequestClearFaults() { clear_requested_ = true; }
   Fault fault() const { return supervisor_.latched(); }
 
@@ -159,7 +157,6 @@ class ControlTick {
   PositionLoop loop_;
   Supervisor::State supervisor_state_;
   Supervisor supervisor_;
-  SupervisorInput last_input_;
 
   std::uint32_t tick_ = 0;
   bool clear_requested_ = false;
