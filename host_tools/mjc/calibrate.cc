@@ -38,7 +38,7 @@ void AddCalibrate(CLI::App& app, int* status) {
       ->check(CLI::Range(1.0, 90.0))
       ->capture_default_str();
   cmd->add_option("--frequency-hz", frequency_hz, "Sweep frequency")
-      ->check(CLI::Range(0.05, 5.0))
+      ->check(CLI::Range(kMinFrequencyHz, kMaxFrequencyHz))
       ->capture_default_str();
   cmd->add_option("--cycles", cycles, "Sweep cycles")
       ->check(CLI::Range(2, 255))

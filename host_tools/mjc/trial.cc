@@ -50,7 +50,7 @@ void AddTrial(CLI::App& app, int* status) {
       ->check(CLI::Range(1.0, 90.0))
       ->capture_default_str();
   cmd->add_option("--frequency-hz", frequency_hz, "Sine frequency")
-      ->check(CLI::Range(0.05, 5.0))
+      ->check(CLI::Range(kMinFrequencyHz, kMaxFrequencyHz))
       ->capture_default_str();
   cmd->add_option("--rest-s", rest_s, "Rest before and after each trial")
       ->check(CLI::Range(0.0, 25.0))

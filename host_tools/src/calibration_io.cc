@@ -91,10 +91,12 @@ std::string DescribeCalibrationResult(protocol::CalibrationResult result,
       return "ISO-TP transfer failed (" + std::to_string(detail) + ")";
     case R::kStorageFailed:
       return "applied, but the board could not store it in flash";
+    case R::kRefusedBusy:
+      return "the board is still applying an earlier change: try again";
     case R::kOutOfRange:
       switch (detail) {
         case 1:
-          return "alpha outside (0, 8)";
+          return "alpha outside (1/8, 8)";
         case 2:
           return "an offset outside ±28.6° (0.5 rad)";
         case 3:

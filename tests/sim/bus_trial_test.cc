@@ -28,9 +28,9 @@ TEST(BusTrial, WindowsArriveAndMatchPlantTruth) {
   params.integration.max_step_s = 33.4e-6;
   params.interface = plant::LoadPlantParams("subject1").interface;
   sim::SimBoard board(params, sim::DefaultBoardConfig());
-  BacklashConfig cal;
-  cal.c_right = Angle::Quantize(params.cable.c_right_rad);
-  cal.c_left = Angle::Quantize(params.cable.c_left_rad);
+  Calibration cal;
+  cal.backlash.c_right = Angle::Quantize(params.cable.c_right_rad);
+  cal.backlash.c_left = Angle::Quantize(params.cable.c_left_rad);
   board.app().SetCalibration(cal);
   board.Tick();
   app::CanNode node(&board.app(), app::CanNodeConfig{});

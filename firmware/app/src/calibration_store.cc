@@ -74,9 +74,9 @@ std::optional<CalibrationStore::Loaded> RestoreCalibration(
     JointApp& app, const CalibrationStore& store) {
   const auto loaded = store.Load();
   if (!loaded) return std::nullopt;
+  const protocol::CalibrationRecord& r = loaded->record;
   const CommandOutcome o =
-      app.SetCalibration(loaded->record.backlash, loaded->record.sea_stiffness,
-                         loaded->record.joint_zero_count);
+      app.SetCalibration({r.backlash, r.sea_stiffness, r.joint_zero_count});
   if (o.result != CommandResult::kAccepted) return std::nullopt;
   return loaded;
 }

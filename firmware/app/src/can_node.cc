@@ -1,6 +1,6 @@
 #include "mjc/app/can_node.h"
 
-#include <algorithm>
+#include <limits>
 
 namespace mjc::app {
 namespace {
@@ -11,6 +11,137 @@ using namespace mjc::protocol;
 Frequency FromMilliHertz(std::uint16_t mhz) {
   return Frequency::FromRaw(
       static_cast<std::int32_t>((static_cast<std::int64_t>(mhz) * 65536 + 500) / 1000));
+}
+
+// The timing a wire trial or sweep config carries, into the core's config.
+template <class Core, class Wire>
+Core Oscillation(const Wire& wire, std::uint32_t tick_hz) {
+  Core c;
+  c.frequency = FromMilliHertz(wire.frequency_mHz);
+  c.repetitions = wire.repetitions;
+  c.rest_ms = wire.rest_100ms * 100u;
+  c.tick_rate_hz = tick_hz;
+  return c;
+}
+
+// A window is half a cycle, 2·Q ticks; WindowTicks reports it in 16-bit offsets. A
+// frequency the trajectory would refuse anyway is left for it to refuse.
+bool WindowReportable(Frequency f, std::uint32_t tick_hz) {
+  if (f <= Frequency{} || 4u * static_cast<std::uint64_t>(f.raw()) >
+                              (std::uint64_t{tick_hz} << Frequency::kFracBits)) {
+    return true;
+  }
+  return 2u * std::uint64_t{QuarterTicks(f, tick_hz)} <=
+         std::numeric_limits<std::uint16_t>::max();
+}
+
+// At least `ms` (rounded up) in ticks.
+std::uint32_t TicksFromMs(std::uint32_t ms, std::uint32_t tick_hz) {
+  return static_cast<std::uint32_t>((std::uint64_t{ms} * tick_hz + 999u) / 1000u);
+}
+
+// Request tags: the origin in the top byte; a command's code and sequence, or a
+// parameter's id, below.
+RequestTag Tag(std::uint8_t origin, std::uint32_t low) {
+  return (std::uint32_t{origin} << 24) | low;
+}
+
+ParamStatus ParamStatusOf(CommandResult r) {
+  switch (r) {
+    case CommandResult::kAccepted:
+      return ParamStatus::kOk;
+    case CommandResult::kRefusedInvalid:
+      return ParamStatus::kOutOfRange;
+    case CommandResult::kRefusedBusy:
+      return ParamStatus::kRefusedBusy;
+    default:
+      return ParamStatus::kRefusedNotIdle;
+  }
+}
+
+CalibrationResult CalibrationResultOf(CommandResult r) {
+  switch (r) {
+    case CommandResult::kAccepted:
+      return CalibrationResult::kAccepted;
+    case CommandResult::kRefusedInvalid:
+      return CalibrationResult::kOutOfRange;
+    case CommandResult::kRefusedBusy:
+      return CalibrationResult::kRefusedBusy;
+    default:
+      return CalibrationResult::kRefusedNotIdle;
+  }
+}
+
+// The ControlConfig field behind a writable control parameter, as visit(field); false
+// for any other id. Fixed-point fields travel as their raw integers.
+template <class Config, class Visit>
+bool VisitControlParam(ParamId id, Config& c, Visit&& visit) {
+  switch (id) {
+    case ParamId::kPositionKp:
+      visit(c.position.kp);
+      return true;
+    case ParamId::kPositionKi:
+      visit(c.position.ki);
+      return true;
+    case ParamId::kPositionKd:
+      visit(c.position.kd);
+      return true;
+    case ParamId::kPositionKff:
+      visit(c.position.kff);
+      return true;
+    case ParamId::kVelocityWindow:
+      visit(c.velocity_window);
+      return true;
+    case ParamId::kTorqueMax:
+      visit(c.supervisor.torque_max);
+      return true;
+    default:
+      return false;
+  }
+}
+
+template <class F>
+std::int32_t RawOf(const F& field) {
+  return field.raw();
+}
+std::int32_t RawOf(std::uint16_t field) { return field; }
+
+template <class F>
+bool SetRaw(F* field, std::int32_t value) {
+  *field = F::FromRaw(value);
+  return true;
+}
+bool SetRaw(std::uint16_t* field, std::int32_t value) {
+  if (value < 0 || value > std::numeric_limits<std::uint16_t>::max()) return false;
+  *field = static_cast<std::uint16_t>(value);
+  return true;
+}
+
+// The calibration in force, read-only over the bus.
+bool ReadCalibrationParam(ParamId id, const ControlConfig& c, bool calibrated,
+                          std::int32_t* value) {
+  switch (id) {
+    case ParamId::kCalibrationRight:
+      *value = c.backlash.c_right.raw();
+      return true;
+    case ParamId::kCalibrationLeft:
+      *value = c.backlash.c_left.raw();
+      return true;
+    case ParamId::kCalibrationAlpha:
+      *value = c.backlash.alpha.raw();
+      return true;
+    case ParamId::kCalibrationStiffness:
+      *value = c.sea_stiffness.raw();
+      return true;
+    case ParamId::kCalibrationJointZero:
+      *value = c.joint_encoder.zero_offset;
+      return true;
+    case ParamId::kCalibrated:
+      *value = calibrated ? 1 : 0;
+      return true;
+    default:
+      return false;
+  }
 }
 
 CommandOutcomeCode Wire(CommandResult r) { return static_cast<CommandOutcomeCode>(r); }
@@ -26,69 +157,68 @@ CanNode::CanNode(JointApp* app, const CanNodeConfig& config, CalibrationStore* s
       isotp_(MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), config.node)),
       store_(store) {}
 
-std::uint32_t CanNode::NowMs() const {
-  return now_ / std::max<std::uint32_t>(1, app_->control().config().tick_hz / 1000);
+CanNodeCounters CanNode::counters() const {
+  CanNodeCounters c = counters_;
+  c.tx_dropped = tx_.dropped();
+  c.events_dropped = app_->dropped_events();
+  return c;
+}
+
+void CanNode::Push(const CanFrame& frame) { (void)tx_.Push(frame); }  // drops counted
+
+template <class M>
+void CanNode::Send(const M& message) {
+  Push(Encode(message, config_.node));
 }
 
 void CanNode::ReplyCalibration(CalibrationResult result, std::uint8_t detail) {
-  const std::uint8_t data[2] = {static_cast<std::uint8_t>(result), detail};
-  const CanFrame reply = MakeSingleFrame(
-      MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), config_.node), data);
-  if (!tx_.ISR_Push(reply)) ++counters_.tx_dropped;
-}
-
-void CanNode::HandleIsoTp(const CanFrame& frame) {
-  CanFrame flow;
-  const IsoTpEvent event = isotp_.Handle(frame, NowMs(), &flow);
-  if (flow.length != 0 && !tx_.ISR_Push(flow)) ++counters_.tx_dropped;
-  if (event == IsoTpEvent::kNone) return;
-  if (event != IsoTpEvent::kComplete) {
-    ++counters_.isotp_errors;
-    if (event != IsoTpEvent::kMalformed) {
-      ReplyCalibration(CalibrationResult::kReassemblyError,
-                       static_cast<std::uint8_t>(event));
-    }
-    return;
-  }
-  CalibrationRecord record;
-  std::uint8_t detail = 0;
-  CalibrationResult result = DecodeCalibration(isotp_.payload(), &record, &detail);
-  if (result == CalibrationResult::kAccepted) {
-    const CommandOutcome o = app_->SetCalibration(record.backlash, record.sea_stiffness,
-                                                  record.joint_zero_count);
-    if (o.result == CommandResult::kRefusedNotIdle)
-      result = CalibrationResult::kRefusedNotIdle;
-    if (o.result == CommandResult::kRefusedInvalid) {
-      result = CalibrationResult::kOutOfRange;
-      detail = o.detail;
-    }
-    // Accepted while idle, so the bridge is off: keep it over a reset.
-    if (result == CalibrationResult::kAccepted && store_ != nullptr &&
-        store_->Save(record) != StoreResult::kOk) {
-      ++counters_.storage_failures;
-      result = CalibrationResult::kStorageFailed;
-    }
-  }
   if (result == CalibrationResult::kAccepted) {
     ++counters_.calibrations_accepted;
   } else {
     ++counters_.calibrations_refused;
   }
-  ReplyCalibration(result, detail);
+  const std::uint8_t data[2] = {static_cast<std::uint8_t>(result), detail};
+  Push(MakeSingleFrame(
+      MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), config_.node), data));
 }
 
-template <class M>
-void CanNode::Send(const M& message) {
-  if (!tx_.ISR_Push(Encode(message, config_.node))) ++counters_.tx_dropped;
+void CanNode::HandleIsoTp(const CanFrame& frame) {
+  CanFrame flow;
+  const IsoTpEvent event = isotp_.Handle(frame, now_ms_, &flow);
+  if (event == IsoTpEvent::kMalformed) {
+    ++counters_.isotp_malformed;
+    return;
+  }
+  ++counters_.handled;
+  if (flow.length != 0) Push(flow);
+  if (event == IsoTpEvent::kNone) return;
+  if (event != IsoTpEvent::kComplete) {
+    ++counters_.isotp_errors;
+    return ReplyCalibration(CalibrationResult::kReassemblyError,
+                            static_cast<std::uint8_t>(event));
+  }
+  CalibrationRecord record;
+  std::uint8_t detail = 0;
+  const CalibrationResult decoded = DecodeCalibration(isotp_.payload(), &record, &detail);
+  if (decoded != CalibrationResult::kAccepted) return ReplyCalibration(decoded, detail);
+  if (config_change_pending_) return ReplyCalibration(CalibrationResult::kRefusedBusy, 0);
+  const CommandOutcome o = app_->SetCalibration(
+      {record.backlash, record.sea_stiffness, record.joint_zero_count},
+      Tag(static_cast<std::uint8_t>(Origin::kCalibration), 0));
+  if (o.result != CommandResult::kAccepted) return AnswerCalibration(o);
+  pending_record_ = record;
+  config_change_pending_ = true;
 }
 
-void CanNode::Reply(CommandCode code, const CommandOutcome& outcome, std::uint8_t seq) {
-  protocol::CommandResult r;
-  r.code = code;
-  r.outcome = Wire(outcome.result);
-  r.detail = outcome.detail;
-  r.sequence = seq;
-  Send(r);
+void CanNode::AnswerCalibration(const CommandOutcome& o) {
+  CalibrationResult result = CalibrationResultOf(o.result);
+  // Applied while idle, so the bridge is off: keep it over a reset.
+  if (result == CalibrationResult::kAccepted && store_ != nullptr &&
+      store_->Save(pending_record_) != StoreResult::kOk) {
+    ++counters_.storage_failures;
+    result = CalibrationResult::kStorageFailed;
+  }
+  ReplyCalibration(result, o.detail);
 }
 
 void CanNode::HandleFrame(const CanFrame& frame) {
@@ -120,7 +250,7 @@ void CanNode::HandleFrame(const CanFrame& frame) {
       protocol::Setpoint s;
       if (count(Decode(frame, &s))) {
         app_->SetStreamTarget(s.position);
-        last_setpoint_tick_ = app_->last().telemetry.tick;
+        last_setpoint_tick_ = now_;
       }
       return;
     }
@@ -135,7 +265,6 @@ void CanNode::HandleFrame(const CanFrame& frame) {
       return;
     }
     case Function::kIsoTpToBoard:
-      ++counters_.handled;
       HandleIsoTp(frame);
       return;
     case Function::kHostHeartbeat: {
@@ -150,199 +279,144 @@ void CanNode::HandleFrame(const CanFrame& frame) {
 }
 
 void CanNode::HandleCommand(const Command& c) {
-  last_command_ = c.code;
-  last_sequence_ = c.sequence;
+  const RequestTag tag =
+      Tag(static_cast<std::uint8_t>(Origin::kCommand),
+          (std::uint32_t{static_cast<std::uint8_t>(c.code)} << 8) | c.sequence);
   const std::uint32_t hz = app_->control().config().tick_hz;
-  CommandOutcome outcome;
+  CommandOutcome o;
   switch (c.code) {
     case CommandCode::kStop:
-      streaming_ = false;
-      outcome = app_->Stop();
+      o = app_->Stop(tag);
       break;
     case CommandCode::kClearFaults:
-      app_->SetCommandTimeout(false);  // the cause a stream timeout left behind
-      outcome = app_->ClearFaults();
+      o = app_->ClearFaults(tag);
       break;
     case CommandCode::kStartTrial: {
       if (!have_trial_) {
-        outcome = {CommandResult::kRefusedInvalid, 0};
+        o = {CommandResult::kRefusedInvalid, 0};
         break;
       }
-      SineConfig sine;
+      auto sine = Oscillation<SineConfig>(trial_, hz);
       sine.amplitude = trial_.amplitude;
-      sine.frequency = FromMilliHertz(trial_.frequency_mHz);
-      sine.repetitions = trial_.repetitions;
-      sine.rest_ms = trial_.rest_100ms * 100u;
-      sine.tick_rate_hz = hz;
-      outcome = app_->StartTrial(sine);
+      o = WindowReportable(sine.frequency, hz)
+              ? app_->StartTrial(sine, tag)
+              : CommandOutcome{CommandResult::kRefusedInvalid, kDetailWindowTooLong};
       break;
     }
     case CommandCode::kStartSweep: {
       if (!have_sweep_) {
-        outcome = {CommandResult::kRefusedInvalid, 0};
+        o = {CommandResult::kRefusedInvalid, 0};
         break;
       }
-      mjc::SweepConfig sweep;
+      auto sweep = Oscillation<mjc::SweepConfig>(sweep_, hz);
       sweep.end_amplitude = sweep_.end_amplitude;
-      sweep.frequency = FromMilliHertz(sweep_.frequency_mHz);
-      sweep.repetitions = sweep_.repetitions;
-      sweep.rest_ms = sweep_.rest_100ms * 100u;
-      sweep.tick_rate_hz = hz;
-      outcome = app_->StartCalibrationSweep(sweep);
+      o = WindowReportable(sweep.frequency, hz)
+              ? app_->StartCalibrationSweep(sweep, tag)
+              : CommandOutcome{CommandResult::kRefusedInvalid, kDetailWindowTooLong};
       break;
     }
     case CommandCode::kStartStream:
-      outcome = app_->StartStream(config_.stream_rate);
-      if (outcome.result == CommandResult::kAccepted) {
-        streaming_ = true;
-        last_setpoint_tick_ = app_->last().telemetry.tick;
-      }
+      o = app_->StartStream(config_.stream_rate, tag);
       break;
   }
-  Reply(c.code, outcome, c.sequence);
+  // Accepted: answered with the tick's verdict (SendEvent).
+  if (o.result != CommandResult::kAccepted) Answer(tag, o);
+}
+
+void CanNode::SendParam(ParamId id, ParamStatus status) {
+  ParamValue reply;
+  reply.id = id;
+  reply.status = status;
+  const ControlConfig& config = app_->control().config();
+  if (!VisitControlParam(id, config,
+                         [&](const auto& field) { reply.value = RawOf(field); })) {
+    (void)ReadCalibrationParam(id, config, app_->calibrated(), &reply.value);
+  }
+  Send(reply);
 }
 
 void CanNode::HandleParam(ParamId id, bool write, std::int32_t value) {
-  ParamValue reply;
-  reply.id = id;
-  std::uint16_t* rate = nullptr;
+  // The node's own: transmit rates (at most the tick rate) and the stream timeout.
+  std::uint16_t* own = nullptr;
+  std::int32_t low = 0;
+  std::int32_t high = static_cast<std::int32_t>(app_->control().config().tick_hz);
   switch (id) {
     case ParamId::kTelemetryAnglesHz:
-      rate = &config_.angles_hz;
+      own = &config_.angles_hz;
       break;
     case ParamId::kTelemetryTorqueHz:
-      rate = &config_.torque_hz;
+      own = &config_.torque_hz;
       break;
     case ParamId::kTelemetryPowerHz:
-      rate = &config_.power_hz;
+      own = &config_.power_hz;
       break;
     case ParamId::kTelemetryEnergyHz:
-      rate = &config_.energy_hz;
+      own = &config_.energy_hz;
       break;
     case ParamId::kTelemetryControlHz:
-      rate = &config_.control_hz;
+      own = &config_.control_hz;
       break;
     case ParamId::kHeartbeatHz:
-      rate = &config_.heartbeat_hz;
+      own = &config_.heartbeat_hz;
       break;
     case ParamId::kStreamTimeoutMs:
-      rate = &config_.stream_timeout_ms;
+      own = &config_.stream_timeout_ms;
+      low = 1;
+      high = 60000;
       break;
     default:
       break;
   }
-  if (rate != nullptr) {
-    const std::int32_t limit =
-        id == ParamId::kStreamTimeoutMs
-            ? 60000
-            : static_cast<std::int32_t>(app_->control().config().tick_hz);
-    if (write && (value < 0 || value > limit)) {
+  if (own != nullptr) {
+    ParamValue reply;
+    reply.id = id;
+    if (write && (value < low || value > high)) {
       reply.status = ParamStatus::kOutOfRange;
     } else if (write) {
-      *rate = static_cast<std::uint16_t>(value);
+      *own = static_cast<std::uint16_t>(value);
     }
-    reply.value = *rate;
+    reply.value = *own;
     return Send(reply);
   }
-  // Control parameters: readable always, writable only while idle (a new ControlConfig
-  // restarts the tick's state).
+
+  // The control config's: readable always; written through the app, which applies it
+  // in the tick while idle. The calibration's: read-only (uploaded whole over ISO-TP).
   ControlConfig config = app_->control().config();
-  std::int32_t raw = 0;
-  switch (id) {
-    case ParamId::kPositionKp:
-      raw = config.position.kp.raw();
-      break;
-    case ParamId::kPositionKi:
-      raw = config.position.ki.raw();
-      break;
-    case ParamId::kPositionKd:
-      raw = config.position.kd.raw();
-      break;
-    case ParamId::kPositionKff:
-      raw = config.position.kff.raw();
-      break;
-    case ParamId::kVelocityWindow:
-      raw = config.velocity_window;
-      break;
-    case ParamId::kTorqueMax:
-      raw = config.supervisor.torque_max.raw();
-      break;
-    // The calibration in force: read-only (a calibration is uploaded whole over ISO-TP).
-    case ParamId::kCalibrationRight:
-    case ParamId::kCalibrationLeft:
-    case ParamId::kCalibrationAlpha:
-    case ParamId::kCalibrationStiffness:
-    case ParamId::kCalibrationJointZero:
-    case ParamId::kCalibrated:
-      switch (id) {
-        case ParamId::kCalibrationRight:
-          reply.value = config.backlash.c_right.raw();
-          break;
-        case ParamId::kCalibrationLeft:
-          reply.value = config.backlash.c_left.raw();
-          break;
-        case ParamId::kCalibrationAlpha:
-          reply.value = config.backlash.alpha.raw();
-          break;
-        case ParamId::kCalibrationStiffness:
-          reply.value = config.sea_stiffness.raw();
-          break;
-        case ParamId::kCalibrationJointZero:
-          reply.value = config.joint_encoder.zero_offset;
-          break;
-        default:
-          reply.value = app_->calibrated() ? 1 : 0;
-          break;
-      }
-      if (write) reply.status = ParamStatus::kReadOnly;
-      return Send(reply);
-    default:
-      reply.status = ParamStatus::kUnknown;
-      return Send(reply);
+  bool in_range = true;
+  const bool control = VisitControlParam(
+      id, config, [&](auto& field) { in_range = SetRaw(&field, value); });
+  std::int32_t ignored = 0;
+  if (!control) {
+    const bool calibration = ReadCalibrationParam(id, config, false, &ignored);
+    if (!calibration) return SendParam(id, ParamStatus::kUnknown);
+    return SendParam(id, write ? ParamStatus::kReadOnly : ParamStatus::kOk);
   }
-  reply.value = raw;
-  if (write) {
-    if (app_->state() != AppState::kIdle) {
-      reply.status = ParamStatus::kRefusedNotIdle;
-      return Send(reply);
+  if (!write) return SendParam(id, ParamStatus::kOk);
+  if (!in_range) return SendParam(id, ParamStatus::kOutOfRange);
+  if (config_change_pending_) return SendParam(id, ParamStatus::kRefusedBusy);
+  const RequestTag tag =
+      Tag(static_cast<std::uint8_t>(Origin::kParam), static_cast<std::uint16_t>(id));
+  const CommandOutcome o = app_->Configure(config, tag);
+  if (o.result != CommandResult::kAccepted) return Answer(tag, o);
+  config_change_pending_ = true;
+}
+
+void CanNode::Answer(RequestTag tag, const CommandOutcome& outcome) {
+  switch (static_cast<Origin>(tag >> 24)) {
+    case Origin::kCommand: {
+      protocol::CommandResult r;
+      r.code = static_cast<CommandCode>((tag >> 8) & 0xFFu);
+      r.outcome = Wire(outcome.result);
+      r.detail = outcome.detail;
+      r.sequence = static_cast<std::uint8_t>(tag & 0xFFu);
+      return Send(r);
     }
-    switch (id) {
-      case ParamId::kPositionKp:
-        config.position.kp = decltype(config.position.kp)::FromRaw(value);
-        break;
-      case ParamId::kPositionKi:
-        config.position.ki = decltype(config.position.ki)::FromRaw(value);
-        break;
-      case ParamId::kPositionKd:
-        config.position.kd = decltype(config.position.kd)::FromRaw(value);
-        break;
-      case ParamId::kPositionKff:
-        config.position.kff = decltype(config.position.kff)::FromRaw(value);
-        break;
-      case ParamId::kVelocityWindow:
-        if (value < 0 || value > 0xFFFF) {
-          reply.status = ParamStatus::kOutOfRange;
-          return Send(reply);
-        }
-        config.velocity_window = static_cast<std::uint16_t>(value);
-        break;
-      case ParamId::kTorqueMax:
-        config.supervisor.torque_max = Torque::FromRaw(value);
-        break;
-      default:
-        break;
-    }
-    // Validate here so the reply can say so; the app re-validates in the tick.
-    if (ControlTick::Validate(config) != ControlConfigError::kOk) {
-      reply.status = ParamStatus::kOutOfRange;
-      return Send(reply);
-    }
-    const CommandOutcome o = app_->Configure(config);
-    reply.status = o.result == CommandResult::kAccepted ? ParamStatus::kOk
-                                                        : ParamStatus::kRefusedNotIdle;
-    if (reply.status == ParamStatus::kOk) reply.value = value;
+    case Origin::kParam:
+      return SendParam(static_cast<ParamId>(tag & 0xFFFFu),
+                       ParamStatusOf(outcome.result));
+    case Origin::kCalibration:
+      return AnswerCalibration(outcome);
   }
-  Send(reply);
 }
 
 void CanNode::SendEvent(const AppEvent& e) {
@@ -352,17 +426,21 @@ void CanNode::SendEvent(const AppEvent& e) {
       f.fault = e.fault;
       f.tick = e.tick;
       f.state = BoardState::kFault;
-      Send(f);
-      streaming_ = false;
-      return;
+      return Send(f);
     }
-    case AppEvent::Kind::kCommandRefused:
-      // Refused in the tick (the state changed after the main loop accepted it).
-      Reply(last_command_, e.refusal, last_sequence_);
-      return;
+    case AppEvent::Kind::kCommandDone: {
+      const auto origin = static_cast<Origin>(e.tag >> 24);
+      if (origin == Origin::kParam || origin == Origin::kCalibration) {
+        config_change_pending_ = false;
+      }
+      const bool stream_started =
+          origin == Origin::kCommand && e.outcome.result == CommandResult::kAccepted &&
+          ((e.tag >> 8) & 0xFFu) == static_cast<std::uint8_t>(CommandCode::kStartStream);
+      if (stream_started) last_setpoint_tick_ = e.tick;
+      return Answer(e.tag, e.outcome);
+    }
     case AppEvent::Kind::kStateChanged:
-      if (e.state != AppState::kRunning) streaming_ = false;
-      next_heartbeat_ = 0;  // tell the host at once
+      next_heartbeat_ = now_;  // tell the host at once
       return;
     case AppEvent::Kind::kWindow: {
       const WindowSummary& w = e.window;
@@ -377,14 +455,24 @@ void CanNode::SendEvent(const AppEvent& e) {
       Send(WindowWork{FixedCast<WireEnergy>(w.positive_work),
                       FixedCast<WireEnergy>(w.negative_work)});
       Send(WindowPeaks{w.peak_power, w.peak_torque});
+      // Fits: trials and sweeps with longer windows are refused (kDetailWindowTooLong).
       WindowTicks t;
       t.start_tick = w.start_tick;
       t.peak_offset = static_cast<std::uint16_t>(w.peak_tick - w.start_tick);
       t.end_offset = static_cast<std::uint16_t>(w.end_tick - w.start_tick);
-      Send(t);
-      return;
+      return Send(t);
     }
   }
+}
+
+void CanNode::AdvanceClock(std::uint32_t tick) {
+  // Whole milliseconds carried with their remainder: exact at any tick rate, and the
+  // millisecond clock wraps on its own, not when the tick counter does.
+  const std::uint32_t hz = app_->control().config().tick_hz;
+  const std::uint64_t scaled = std::uint64_t{tick - now_} * 1000u + ms_remainder_;
+  now_ms_ += static_cast<std::uint32_t>(scaled / hz);
+  ms_remainder_ = static_cast<std::uint32_t>(scaled % hz);
+  now_ = tick;
 }
 
 bool CanNode::Due(std::uint16_t hz, std::uint32_t* next_tick) {
@@ -397,23 +485,23 @@ bool CanNode::Due(std::uint16_t hz, std::uint32_t* next_tick) {
 
 void CanNode::Poll() {
   const TickResult& r = app_->last();
-  now_ = r.telemetry.tick;
+  AdvanceClock(r.telemetry.tick);
   AppEvent e;
   while (app_->PopEvent(&e)) SendEvent(e);
-  if (isotp_.Poll(NowMs()) == IsoTpEvent::kTimeout) {
+  if (isotp_.Poll(now_ms_) == IsoTpEvent::kTimeout) {
     ++counters_.isotp_errors;
     ReplyCalibration(CalibrationResult::kReassemblyError,
                      static_cast<std::uint8_t>(IsoTpEvent::kTimeout));
   }
 
-  if (streaming_) {
-    const std::uint32_t timeout_ticks =
-        config_.stream_timeout_ms * (app_->control().config().tick_hz / 1000u);
-    if (now_ - last_setpoint_tick_ > timeout_ticks) {
-      app_->SetCommandTimeout(true);  // the next tick latches kCommandTimeout
-      ++counters_.stream_timeouts;
-      streaming_ = false;
-    }
+  const bool streaming =
+      app_->state() == AppState::kRunning && r.telemetry.segment == Segment::kStream;
+  if (streaming &&
+      now_ - last_setpoint_tick_ >
+          TicksFromMs(config_.stream_timeout_ms, app_->control().config().tick_hz)) {
+    app_->RaiseCommandTimeout();  // the next tick latches kCommandTimeout
+    ++counters_.stream_timeouts;
+    last_setpoint_tick_ = now_;  // once: the fault ends the stream
   }
 
   const Telemetry& t = r.telemetry;

@@ -1,118 +1,123 @@
 #include "mjc/app/joint_app.h"
 
 namespace mjc::app {
+namespace {
+
+template <class Error>
+CommandOutcome Invalid(Error e) {
+  return {CommandResult::kRefusedInvalid, static_cast<std::uint8_t>(e)};
+}
+
+}  // namespace
 
 JointApp::JointApp(const ControlConfig& config) { control_.Configure(config); }
 
 CommandOutcome JointApp::Submit(const Command& command) {
-  if (!commands_.ISR_Push(command)) return {CommandResult::kRefusedBusy, 0};
+  if (!commands_.Push(command)) return {CommandResult::kRefusedBusy, 0};
   return {};
 }
 
-CommandOutcome JointApp::Configure(const ControlConfig& config) {
+CommandOutcome JointApp::CheckStart(bool needs_calibration) const {
   if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
+  if (needs_calibration && !calibrated_) return {CommandResult::kRefusedUncalibrated, 0};
+  return {};
+}
+
+CommandOutcome JointApp::Configure(const ControlConfig& config, RequestTag tag) {
+  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
+  const ControlConfigError error = ControlTick::Validate(config);
+  if (error != ControlConfigError::kOk) return Invalid(error);
   Command c;
   c.kind = CommandKind::kConfigure;
+  c.tag = tag;
   c.config = config;
   return Submit(c);
 }
 
-// Validated here, merged into the running config in the tick: `full` also takes the
-// SEA stiffness and the joint encoder's zero from `calibration`.
-CommandOutcome JointApp::SubmitCalibration(const ControlConfig& calibration, bool full) {
+CommandOutcome JointApp::SetCalibration(const Calibration& calibration, RequestTag tag) {
   if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
-  const BacklashConfigError error = Validate(calibration.backlash);
-  if (error != BacklashConfigError::kOk) {
-    return {CommandResult::kRefusedInvalid, static_cast<std::uint8_t>(error)};
-  }
+  const CalibrationError error = Validate(calibration);
+  if (error != CalibrationError::kOk) return Invalid(error);
   Command c;
   c.kind = CommandKind::kSetCalibration;
-  c.config = calibration;
-  c.full_calibration = full;
+  c.tag = tag;
+  c.calibration = calibration;
   return Submit(c);
 }
 
-CommandOutcome JointApp::SetCalibration(const BacklashConfig& backlash) {
-  ControlConfig calibration;
-  calibration.backlash = backlash;
-  return SubmitCalibration(calibration, false);
-}
-
-CommandOutcome JointApp::SetCalibration(const BacklashConfig& backlash,
-                                        Stiffness sea_stiffness,
-                                        std::uint16_t joint_zero_count) {
-  ControlConfig calibration;
-  calibration.backlash = backlash;
-  calibration.sea_stiffness = sea_stiffness;
-  calibration.joint_encoder.zero_offset = joint_zero_count;
-  return SubmitCalibration(calibration, true);
-}
-
-CommandOutcome JointApp::StartTrial(const SineConfig& sine) {
-  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
-  if (!calibrated_) return {CommandResult::kRefusedUncalibrated, 0};
-  const TrajectoryError error = Validate(sine);
-  if (error != TrajectoryError::kOk) {
-    return {CommandResult::kRefusedInvalid, static_cast<std::uint8_t>(error)};
+CommandOutcome JointApp::StartTrial(const SineConfig& sine, RequestTag tag) {
+  if (const CommandOutcome o = CheckStart(true); o.result != CommandResult::kAccepted) {
+    return o;
   }
+  const TrajectoryError error = Validate(sine);
+  if (error != TrajectoryError::kOk) return Invalid(error);
   Command c;
   c.kind = CommandKind::kStartTrial;
+  c.tag = tag;
   c.sine = sine;
   return Submit(c);
 }
 
-CommandOutcome JointApp::StartCalibrationSweep(const SweepConfig& sweep) {
-  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
-  const TrajectoryError error = Validate(sweep);
-  if (error != TrajectoryError::kOk) {
-    return {CommandResult::kRefusedInvalid, static_cast<std::uint8_t>(error)};
+CommandOutcome JointApp::StartCalibrationSweep(const SweepConfig& sweep, RequestTag tag) {
+  if (const CommandOutcome o = CheckStart(false); o.result != CommandResult::kAccepted) {
+    return o;
   }
+  const TrajectoryError error = Validate(sweep);
+  if (error != TrajectoryError::kOk) return Invalid(error);
   Command c;
   c.kind = CommandKind::kStartSweep;
+  c.tag = tag;
   c.sweep = sweep;
   return Submit(c);
 }
 
-CommandOutcome JointApp::StartStream(AngularVelocity max_rate) {
-  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
-  if (!calibrated_) return {CommandResult::kRefusedUncalibrated, 0};
-  if (max_rate.raw() <= 0) {
-    return {CommandResult::kRefusedInvalid,
-            static_cast<std::uint8_t>(TrajectoryError::kRateNotPositive)};
+CommandOutcome JointApp::StartStream(AngularVelocity max_rate, RequestTag tag) {
+  if (const CommandOutcome o = CheckStart(true); o.result != CommandResult::kAccepted) {
+    return o;
   }
+  const TrajectoryError error = ValidateStreamRate(max_rate, control_.config().tick_hz);
+  if (error != TrajectoryError::kOk) return Invalid(error);
   Command c;
   c.kind = CommandKind::kStartStream;
+  c.tag = tag;
   c.stream_rate = max_rate;
   return Submit(c);
 }
 
-void JointApp::ISR_FollowStream() {
-  if (control_.trajectory().mode() != TrajectoryMode::kStream) return;
-  const std::int32_t target = stream_target_.load(std::memory_order_relaxed);
-  if (target == applied_stream_target_) return;
-  applied_stream_target_ = target;
-  (void)control_.trajectory().SetStreamTarget(Angle::FromRaw(target));
-}
-
-CommandOutcome JointApp::Stop() {
+CommandOutcome JointApp::Stop(RequestTag tag) {
   Command c;
   c.kind = CommandKind::kStop;
+  c.tag = tag;
   return Submit(c);
 }
 
-CommandOutcome JointApp::ClearFaults() {
+CommandOutcome JointApp::ClearFaults(RequestTag tag) {
   Command c;
   c.kind = CommandKind::kClearFaults;
+  c.tag = tag;
   return Submit(c);
 }
 
-void JointApp::ISR_Refuse(CommandResult result, std::uint8_t detail) {
+void JointApp::ISR_FollowHost() {
+  const std::uint32_t timeouts = command_timeouts_.load(std::memory_order_acquire);
+  if (timeouts != command_timeouts_seen_) {
+    command_timeouts_seen_ = timeouts;
+    control_.RaiseCommandTimeout();
+  }
+  if (control_.trajectory().mode() == TrajectoryMode::kStream) {
+    (void)control_.trajectory().SetStreamTarget(
+        Angle::FromRaw(stream_target_.load(std::memory_order_relaxed)));
+  }
+}
+
+void JointApp::ISR_Done(RequestTag tag, CommandOutcome outcome) {
   AppEvent e;
-  e.kind = AppEvent::Kind::kCommandRefused;
+  e.kind = AppEvent::Kind::kCommandDone;
   e.tick = result_.telemetry.tick;
   e.state = state_;
-  e.refusal = {result, detail};
-  events_.ISR_Push(e);
+  e.tag = tag;
+  e.outcome = outcome;
+  events_.Push(e);
 }
 
 void JointApp::ISR_Enter(AppState next) {
@@ -123,86 +128,91 @@ void JointApp::ISR_Enter(AppState next) {
   e.kind = AppEvent::Kind::kStateChanged;
   e.tick = result_.telemetry.tick;
   e.state = next;
-  events_.ISR_Push(e);
+  events_.Push(e);
 }
 
 void JointApp::ISR_ApplyCommand() {
-  Command c;
-  if (!commands_.Pop(&c)) return;
+  // Read in place: an empty mailbox costs two loads, a command no copy.
+  const Command* c = commands_.Front();
+  if (c == nullptr) return;
+  if (c->kind == CommandKind::kClearFaults && state_ == AppState::kFault) {
+    // Judged in this tick's step, on this tick's sample; answered in ISR_AfterStep.
+    control_.RequestClearFaults();
+    clear_pending_ = true;
+    clear_tag_ = c->tag;
+  } else {
+    ISR_Done(c->tag, ISR_Apply(*c));
+  }
+  commands_.DropFront();
+}
+
+CommandOutcome JointApp::ISR_Apply(const Command& c) {
   const bool idle = state_ == AppState::kIdle;
   switch (c.kind) {
     case CommandKind::kConfigure:
     case CommandKind::kSetCalibration: {
-      if (!idle) return ISR_Refuse(CommandResult::kRefusedNotIdle);
-      if (c.kind == CommandKind::kSetCalibration) {
-        const ControlConfig calibration = c.config;
-        c.config = control_.config();
-        c.config.backlash = calibration.backlash;
-        if (c.full_calibration) {
-          c.config.sea_stiffness = calibration.sea_stiffness;
-          c.config.joint_encoder.zero_offset = calibration.joint_encoder.zero_offset;
-        }
-      }
-      const ControlConfigError error = control_.Configure(c.config);
-      if (error != ControlConfigError::kOk) {
-        return ISR_Refuse(CommandResult::kRefusedInvalid,
-                          static_cast<std::uint8_t>(error));
-      }
-      if (c.kind == CommandKind::kSetCalibration) calibrated_ = true;
-      return;
+      if (!idle) return {CommandResult::kRefusedNotIdle, 0};
+      const bool calibration = c.kind == CommandKind::kSetCalibration;
+      // Validated when submitted; Configure checks again, so nothing unchecked runs.
+      const ControlConfigError error = control_.Configure(
+          calibration ? c.calibration.AppliedTo(control_.config()) : c.config);
+      if (error != ControlConfigError::kOk) return Invalid(error);
+      if (calibration) calibrated_ = true;
+      return {};
     }
     case CommandKind::kStartTrial:
     case CommandKind::kStartSweep: {
-      if (!idle) return ISR_Refuse(CommandResult::kRefusedNotIdle);
       const bool trial = c.kind == CommandKind::kStartTrial;
-      if (trial && !calibrated_) return ISR_Refuse(CommandResult::kRefusedUncalibrated);
+      if (const CommandOutcome o = CheckStart(trial);
+          o.result != CommandResult::kAccepted) {
+        return o;
+      }
       const TrajectoryError error = trial ? control_.trajectory().StartSine(c.sine)
                                           : control_.trajectory().StartSweep(c.sweep);
-      if (error != TrajectoryError::kOk) {
-        return ISR_Refuse(CommandResult::kRefusedInvalid,
-                          static_cast<std::uint8_t>(error));
-      }
-      return ISR_Enter(trial ? AppState::kRunning : AppState::kCalibrating);
+      if (error != TrajectoryError::kOk) return Invalid(error);
+      ISR_Enter(trial ? AppState::kRunning : AppState::kCalibrating);
+      return {};
     }
     case CommandKind::kStartStream: {
-      if (!idle) return ISR_Refuse(CommandResult::kRefusedNotIdle);
-      if (!calibrated_) return ISR_Refuse(CommandResult::kRefusedUncalibrated);
+      if (const CommandOutcome o = CheckStart(true);
+          o.result != CommandResult::kAccepted) {
+        return o;
+      }
       // From where the motor is (idle, the bridge was off and it may have moved): no
       // jump on the first streamed tick; it holds there until targets arrive.
       const Angle from = result_.telemetry.motor;
       const TrajectoryError error =
           control_.trajectory().StartStream(from, c.stream_rate);
-      if (error != TrajectoryError::kOk) {
-        return ISR_Refuse(CommandResult::kRefusedInvalid,
-                          static_cast<std::uint8_t>(error));
-      }
-      applied_stream_target_ = from.raw();
+      if (error != TrajectoryError::kOk) return Invalid(error);
       stream_target_.store(from.raw(), std::memory_order_relaxed);
-      return ISR_Enter(AppState::kRunning);
+      ISR_Enter(AppState::kRunning);
+      return {};
     }
     case CommandKind::kStop:
       control_.trajectory().Stop();
       if (state_ != AppState::kFault) ISR_Enter(AppState::kIdle);
-      return;
+      return {};
     case CommandKind::kClearFaults:
-      // Judged in this tick's step, on this tick's sample (ISR_AfterStep).
-      if (state_ == AppState::kFault) control_.RequestClearFaults();
-      return;
+      return {};  // no fault latched: nothing to clear
   }
+  return {};
 }
 
 void JointApp::ISR_AfterStep() {
-  if (result_.clear == FaultClear::kCleared && result_.raised == Fault::kNone) {
-    ISR_Enter(AppState::kIdle);
-  } else if (result_.clear == FaultClear::kRefused) {
-    ISR_Refuse(CommandResult::kRefusedFaultActive);
+  if (clear_pending_) {
+    clear_pending_ = false;
+    const bool cleared =
+        result_.clear == FaultClear::kCleared && result_.raised == Fault::kNone;
+    if (cleared) ISR_Enter(AppState::kIdle);
+    ISR_Done(clear_tag_, cleared ? CommandOutcome{}
+                                 : CommandOutcome{CommandResult::kRefusedFaultActive, 0});
   }
   if (result_.raised != Fault::kNone) {
     AppEvent e;
     e.kind = AppEvent::Kind::kFault;
     e.tick = result_.telemetry.tick;
     e.fault = result_.raised;
-    events_.ISR_Push(e);
+    events_.Push(e);
     ISR_Enter(AppState::kFault);
   }
   if (result_.window_completed) {
@@ -211,7 +221,7 @@ void JointApp::ISR_AfterStep() {
     e.tick = result_.telemetry.tick;
     e.state = state_;
     e.window = result_.window;
-    events_.ISR_Push(e);
+    events_.Push(e);
   }
   const bool moving = state_ == AppState::kRunning || state_ == AppState::kCalibrating;
   if (moving && result_.telemetry.segment == Segment::kIdle) ISR_Enter(AppState::kIdle);

@@ -8,7 +8,7 @@ Angle Scaled(Scale alpha, Angle a) { return Mul<Angle>(alpha, a); }
 }  // namespace
 
 BacklashConfigError Validate(const BacklashConfig& config) {
-  if (config.alpha <= Scale{} || config.alpha == Scale::Max()) {
+  if (config.alpha <= kMinBacklashAlpha || config.alpha >= kMaxBacklashAlpha) {
     return BacklashConfigError::kAlphaOutOfRange;
   }
   if (Abs(config.c_right) > kMaxBacklashOffset ||

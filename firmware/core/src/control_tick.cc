@@ -44,9 +44,7 @@ ControlConfigError ControlTick::Validate(const ControlConfig& config) {
   if (mjc::Validate(config.backlash) != BacklashConfigError::kOk) {
     return ControlConfigError::kBacklash;
   }
-  if (config.sea_stiffness <= Stiffness{} || config.sea_stiffness > Stiffness(100)) {
-    return ControlConfigError::kStiffness;
-  }
+  if (!SeaStiffnessValid(config.sea_stiffness)) return ControlConfigError::kStiffness;
   const VelocityEstimatorConfig velocity{.window = config.velocity_window,
                                          .tick_hz = config.tick_hz};
   if (VelocityEstimator::Check(velocity, kMaxVelocityWindow) !=
@@ -58,6 +56,18 @@ ControlConfigError ControlTick::Validate(const ControlConfig& config) {
   if (mjc::Validate(position) != PositionLoopError::kOk)
     return ControlConfigError::kPositionLoop;
   return ControlConfigError::kOk;
+}
+
+CalibrationError Validate(const Calibration& calibration) {
+  const BacklashConfigError backlash = Validate(calibration.backlash);
+  if (backlash != BacklashConfigError::kOk) {
+    return static_cast<CalibrationError>(backlash);
+  }
+  if (!SeaStiffnessValid(calibration.sea_stiffness)) return CalibrationError::kStiffness;
+  if (calibration.joint_zero_count >= kJointCountsPerRev) {
+    return CalibrationError::kJointZero;
+  }
+  return CalibrationError::kOk;
 }
 
 ControlConfigError ControlTick::Configure(const ControlConfig& config) {
@@ -88,7 +98,6 @@ void ControlTick::Restart() {
   supervisor_state_.Clear();
   windows_.Clear();
   energy_.Clear();
-  tick_ = 0;
   last_duty_ = Duty{};
 }
 
@@ -140,7 +149,8 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   in.joint_velocity = velocity;
   in.applied_duty = last_duty_;
   in.tick_overrun = sample.tick_overrun;
-  in.command_timeout = sample.command_timeout;
+  in.command_timeout = command_timeout_raised_;
+  command_timeout_raised_ = false;
   r.clear = FaultClear::kNone;
   if (clear_requested_) {
     clear_requested_ = false;

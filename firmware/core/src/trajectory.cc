@@ -26,12 +26,12 @@ constexpr bool TickRateValid(std::uint32_t tick_rate_hz) {
   return tick_rate_hz >= 1 && tick_rate_hz <= kMaxTickRateHz;
 }
 
-// Q = round(f_tick / (4·f)) for 0 < f <= f_tick/4, so 1 <= Q <= 2^30 and N = 4·Q fits a
-// uint32 (kMaxTickRateHz·2^16 < 2^32).
-std::uint32_t QuarterTicks(Frequency frequency, std::uint32_t tick_rate_hz) {
-  const auto f = static_cast<std::uint64_t>(frequency.raw());
-  const std::uint64_t numerator = std::uint64_t{tick_rate_hz} << Frequency::kFracBits;
-  return static_cast<std::uint32_t>((numerator + 2u * f) / (4u * f));
+// floor(max_rate / f_tick) in Angle raw (Q20 -> Q24): rounding down keeps every step
+// within max_rate·dt. 0 when max_rate·dt is below 1 LSB of Angle.
+std::int64_t StreamStep(AngularVelocity max_rate, std::uint32_t tick_rate_hz) {
+  return (std::int64_t{max_rate.raw()}
+          << (Angle::kFracBits - AngularVelocity::kFracBits)) /
+         tick_rate_hz;
 }
 
 // round(A·ω) in AngularVelocity raw, ω = 2π·f_tick/N = (π/2)·f_tick/Q, for
@@ -107,6 +107,20 @@ TrajectoryError ValidateOscillation(Angle neutral, Angle start_amplitude,
 }
 
 }  // namespace
+
+std::uint32_t QuarterTicks(Frequency frequency, std::uint32_t tick_rate_hz) {
+  const auto f = static_cast<std::uint64_t>(frequency.raw());
+  const std::uint64_t numerator = std::uint64_t{tick_rate_hz} << Frequency::kFracBits;
+  return static_cast<std::uint32_t>((numerator + 2u * f) / (4u * f));
+}
+
+TrajectoryError ValidateStreamRate(AngularVelocity max_rate, std::uint32_t tick_rate_hz) {
+  if (!TickRateValid(tick_rate_hz)) return TrajectoryError::kTickRateOutOfRange;
+  if (max_rate <= AngularVelocity{}) return TrajectoryError::kRateNotPositive;
+  if (StreamStep(max_rate, tick_rate_hz) < 1)
+    return TrajectoryError::kRateBelowResolution;
+  return TrajectoryError::kOk;
+}
 
 TrajectoryError Validate(const SineConfig& config) {
   return ValidateOscillation(config.neutral, config.amplitude, config.amplitude,
@@ -213,14 +227,9 @@ void TrajectoryGenerator::Hold(Angle position) {
 }
 
 TrajectoryError TrajectoryGenerator::StartStream(Angle from, AngularVelocity max_rate) {
-  if (!TickRateValid(tick_rate_hz_)) return TrajectoryError::kTickRateOutOfRange;
-  if (max_rate <= AngularVelocity{}) return TrajectoryError::kRateNotPositive;
-  // floor(max_rate / f_tick) in Angle raw (Q20 -> Q24): rounding down keeps every step
-  // within max_rate·dt.
-  const std::int64_t step =
-      (std::int64_t{max_rate.raw()} << (Angle::kFracBits - AngularVelocity::kFracBits)) /
-      tick_rate_hz_;
-  if (step < 1) return TrajectoryError::kRateBelowResolution;
+  const TrajectoryError error = ValidateStreamRate(max_rate, tick_rate_hz_);
+  if (error != TrajectoryError::kOk) return error;
+  const std::int64_t step = StreamStep(max_rate, tick_rate_hz_);
   mode_ = TrajectoryMode::kStream;
   position_ = from;
   target_ = from;

@@ -49,17 +49,10 @@ CalibrationResult DecodeCalibration(std::span<const std::uint8_t> b,
   r.fit_rms_urad = static_cast<std::uint32_t>(GetLe(&b[28], 4));
   r.fit_lag_us = static_cast<std::uint32_t>(GetLe(&b[32], 4));
   r.fitted_at_unix_s = GetLe(&b[36], 8);
-  const BacklashConfigError backlash = Validate(r.backlash);
-  if (backlash != BacklashConfigError::kOk) {
-    *detail = static_cast<std::uint8_t>(backlash);
-    return CalibrationResult::kOutOfRange;
-  }
-  if (r.sea_stiffness <= Stiffness{} || r.sea_stiffness > Stiffness(100)) {
-    *detail = 100;
-    return CalibrationResult::kOutOfRange;
-  }
-  if (r.joint_zero_count > 16383) {
-    *detail = 101;
+  const CalibrationError error =
+      Validate(Calibration{r.backlash, r.sea_stiffness, r.joint_zero_count});
+  if (error != CalibrationError::kOk) {
+    *detail = static_cast<std::uint8_t>(error);
     return CalibrationResult::kOutOfRange;
   }
   *out = r;

@@ -107,7 +107,10 @@ CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
     out.message = "calibration refused: " + why;
     return out;
   }
-  const app::CommandOutcome o = app.SetCalibration(*config);
+  // The backlash is what was fitted; stiffness and zero stay the board's.
+  const ControlConfig& board_config = app.control().config();
+  const app::CommandOutcome o = app.SetCalibration(
+      {*config, board_config.sea_stiffness, board_config.joint_encoder.zero_offset});
   board.Tick();
   out.uploaded = o.result == app::CommandResult::kAccepted && app.calibrated();
   out.message = out.uploaded ? "uploaded" : "the board refused the calibration";

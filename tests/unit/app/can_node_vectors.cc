@@ -23,11 +23,11 @@ struct QuietIo {
   Actuation written;
 };
 
-BacklashConfig Calibration() {
-  BacklashConfig b;
-  b.c_right = Angle::FromDouble(0.0175);
-  b.c_left = Angle::FromDouble(-0.0175);
-  return b;
+mjc::Calibration TestCalibration() {
+  mjc::Calibration c;
+  c.backlash.c_right = Angle::FromDouble(0.0175);
+  c.backlash.c_left = Angle::FromDouble(-0.0175);
+  return c;
 }
 
 struct Board {
@@ -37,10 +37,19 @@ struct Board {
     for (int i = 0; i < ticks; ++i) {
       app.ISR_Tick(io);
       node.Poll();
-      CanFrame f;
-      while (node.PopTx(&f)) {
-        ++sent[FunctionOf(f.id)];
-        last[FunctionOf(f.id)] = f;
+      Drain();
+    }
+  }
+  // Collects what the node has queued (replies given without waiting for a tick).
+  void Drain() {
+    CanFrame f;
+    while (node.PopTx(&f)) {
+      ++sent[FunctionOf(f.id)];
+      last[FunctionOf(f.id)] = f;
+      protocol::CommandResult r;
+      if (FunctionOf(f.id) == static_cast<std::uint8_t>(Function::kCommandResult) &&
+          Decode(f, &r) == DecodeError::kOk && results_n < 16) {
+        results[results_n++] = r;
       }
     }
   }
@@ -49,12 +58,18 @@ struct Board {
   QuietIo io;
   std::uint32_t sent[128] = {};
   CanFrame last[128] = {};
+  protocol::CommandResult results[16] = {};  // every reply, in order
+  int results_n = 0;
 };
 
 template <class M>
-M Last(const Board& b) {
+M Last(::mjc::vt::Context& vt_context, const Board& b) {
+  const auto function = static_cast<std::uint8_t>(Message<M>::kFunction);
   M m{};
-  (void)Decode(b.last[static_cast<std::uint8_t>(Message<M>::kFunction)], &m);
+  // A message never sent, or one that does not decode, fails here rather than
+  // yielding a zeroed struct the caller might accept.
+  VT_EXPECT_TRUE(b.sent[function] > 0);
+  VT_EXPECT_TRUE(Decode(b.last[function], &m) == DecodeError::kOk);
   return m;
 }
 template <class M>
@@ -63,7 +78,7 @@ std::uint32_t Sent(const Board& b) {
 }
 
 void Calibrate(Board& b) {
-  b.app.SetCalibration(Calibration());
+  b.app.SetCalibration(TestCalibration());
   b.Run(1);
 }
 
@@ -78,7 +93,7 @@ MJC_VECTOR_TEST(CanNode, TrialStartedOverCanWithReplyTelemetryAndWindows) {
   b.node.HandleFrame(Encode(t, 1));
   b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 7}, 1));
   b.Run(1);
-  const protocol::CommandResult r = Last<protocol::CommandResult>(b);
+  const protocol::CommandResult r = Last<protocol::CommandResult>(vt_context, b);
   VT_EXPECT_TRUE(r.outcome == CommandOutcomeCode::kAccepted);
   VT_EXPECT_EQ(r.sequence, 7);
   VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
@@ -98,14 +113,14 @@ MJC_VECTOR_TEST(CanNode, TrialRefusedWithoutConfigOrCalibration) {
   static Board b;
   b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 1}, 1));
   b.Run(1);
-  VT_EXPECT_TRUE(Last<protocol::CommandResult>(b).outcome ==
+  VT_EXPECT_TRUE(Last<protocol::CommandResult>(vt_context, b).outcome ==
                  CommandOutcomeCode::kRefusedInvalid);
   TrialConfig t;
   t.amplitude = Angle::FromDouble(0.2);
   b.node.HandleFrame(Encode(t, 1));
   b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 2}, 1));
   b.Run(1);
-  VT_EXPECT_TRUE(Last<protocol::CommandResult>(b).outcome ==
+  VT_EXPECT_TRUE(Last<protocol::CommandResult>(vt_context, b).outcome ==
                  CommandOutcomeCode::kRefusedUncalibrated);
   VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
 }
@@ -153,7 +168,7 @@ MJC_VECTOR_TEST(CanNode, SilentStreamStopsTheMotorAndLatches) {
   VT_EXPECT_TRUE(ticks <= 1000 - 50 + 2);
   VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
   VT_EXPECT_TRUE(!b.io.written.bridge_enabled);
-  VT_EXPECT_TRUE(Last<FaultEvent>(b).fault == Fault::kCommandTimeout);
+  VT_EXPECT_TRUE(Last<FaultEvent>(vt_context, b).fault == Fault::kCommandTimeout);
   VT_EXPECT_EQ(b.node.counters().stream_timeouts, 1u);
   b.Run(100);
   VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
@@ -167,7 +182,7 @@ MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
   static Board b;
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kTelemetryAnglesHz, 100}, 1));
   b.Run(1);
-  VT_EXPECT_TRUE(Last<ParamValue>(b).status == ParamStatus::kOk);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOk);
   VT_EXPECT_EQ(b.node.config().angles_hz, 100);
   const std::uint32_t before = Sent<TelemetryAngles>(b);
   b.Run(1000);
@@ -175,25 +190,86 @@ MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
                  Sent<TelemetryAngles>(b) - before <= 11);
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kTelemetryAnglesHz, 20000}, 1));
   b.Run(1);
-  VT_EXPECT_TRUE(Last<ParamValue>(b).status == ParamStatus::kOutOfRange);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOutOfRange);
   VT_EXPECT_EQ(b.node.config().angles_hz, 100);
   // A control gain: written while idle, refused while running.
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kPositionKp, 40 << 16}, 1));
   b.Run(2);
-  VT_EXPECT_TRUE(Last<ParamValue>(b).status == ParamStatus::kOk);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOk);
   VT_EXPECT_EQ(b.app.control().config().position.kp.raw(), 40 << 16);
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kVelocityWindow, 500}, 1));  // even
   b.Run(1);
-  VT_EXPECT_TRUE(Last<ParamValue>(b).status == ParamStatus::kOutOfRange);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOutOfRange);
   Calibrate(b);
   b.node.HandleFrame(Encode(Command{CommandCode::kStartStream, 5}, 1));
   b.Run(1);
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kPositionKp, 1 << 16}, 1));
   b.Run(1);
-  VT_EXPECT_TRUE(Last<ParamValue>(b).status == ParamStatus::kRefusedNotIdle);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kRefusedNotIdle);
   b.node.HandleFrame(Encode(ParamRead{ParamId::kPositionKp}, 1));
   b.Run(1);
-  VT_EXPECT_EQ(Last<ParamValue>(b).value, 40 << 16);
+  VT_EXPECT_EQ(Last<ParamValue>(vt_context, b).value, 40 << 16);
+}
+
+MJC_VECTOR_TEST(CanNode, EachCommandIsAnsweredWithItsOwnVerdict) {
+  static Board b;
+  TrialConfig t;
+  t.amplitude = Angle::FromDouble(0.2);
+  b.node.HandleFrame(Encode(t, 1));
+  // Three commands before one tick: each reply carries its own sequence and verdict.
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 10}, 1));  // uncalibrated
+  b.node.HandleFrame(Encode(Command{CommandCode::kStop, 11}, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 12}, 1));
+  b.Run(3);
+  VT_EXPECT_EQ(b.results_n, 3);
+  VT_EXPECT_EQ(b.results[0].sequence, 10);
+  VT_EXPECT_TRUE(b.results[0].outcome == CommandOutcomeCode::kRefusedUncalibrated);
+  VT_EXPECT_EQ(b.results[1].sequence, 11);
+  VT_EXPECT_TRUE(b.results[1].outcome == CommandOutcomeCode::kAccepted);
+  VT_EXPECT_EQ(b.results[2].sequence, 12);
+  VT_EXPECT_TRUE(b.results[2].outcome == CommandOutcomeCode::kAccepted);
+}
+
+MJC_VECTOR_TEST(CanNode, WindowsLongerThanTheWireFieldAreRefused) {
+  static Board b;
+  Calibrate(b);
+  TrialConfig t;
+  t.amplitude = Angle::FromDouble(0.2);
+  t.frequency_mHz = 50;  // 10 s half-cycles: 100,000 ticks, beyond the 16-bit offsets
+  b.node.HandleFrame(Encode(t, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 20}, 1));
+  b.Run(2);
+  const protocol::CommandResult r = Last<protocol::CommandResult>(vt_context, b);
+  VT_EXPECT_TRUE(r.outcome == CommandOutcomeCode::kRefusedInvalid);
+  VT_EXPECT_EQ(r.detail, kDetailWindowTooLong);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  t.frequency_mHz = 80;  // 6.25 s half-cycles: 62,500 ticks fit
+  b.node.HandleFrame(Encode(t, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 21}, 1));
+  b.Run(2);
+  VT_EXPECT_TRUE(Last<protocol::CommandResult>(vt_context, b).outcome ==
+                 CommandOutcomeCode::kAccepted);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+}
+
+MJC_VECTOR_TEST(CanNode, ParameterWritesKeepTheClockAndTelemetryRunning) {
+  static Board b;
+  b.Run(2000);
+  const std::uint32_t tick_before = Last<Heartbeat>(vt_context, b).tick;
+  // A control parameter restarts the control tick; the board's clock must go on.
+  b.node.HandleFrame(Encode(ParamWrite{ParamId::kPositionKp, 30 << 16}, 1));
+  // A second change before the first is applied is refused as busy, not lost.
+  b.node.HandleFrame(Encode(ParamWrite{ParamId::kPositionKd, 1 << 12}, 1));
+  b.Drain();
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kRefusedBusy);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).id == ParamId::kPositionKd);
+  b.Run(1);  // the tick applies the first write and gives its verdict
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOk);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).id == ParamId::kPositionKp);
+  const std::uint32_t angles_before = Sent<TelemetryAngles>(b);
+  b.Run(2000);
+  VT_EXPECT_TRUE(Sent<TelemetryAngles>(b) - angles_before >= 199);
+  VT_EXPECT_TRUE(Last<Heartbeat>(vt_context, b).tick > tick_before + 1000);
 }
 
 }  // namespace

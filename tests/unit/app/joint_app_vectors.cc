@@ -29,11 +29,11 @@ struct ScriptedIo {
 };
 static_assert(hal::JointIo<ScriptedIo>);
 
-BacklashConfig Calibration() {
-  BacklashConfig b;
-  b.c_right = Angle::FromDouble(0.0175);
-  b.c_left = Angle::FromDouble(-0.0175);
-  return b;
+mjc::Calibration TestCalibration() {
+  mjc::Calibration c;
+  c.backlash.c_right = Angle::FromDouble(0.0175);
+  c.backlash.c_left = Angle::FromDouble(-0.0175);
+  return c;
 }
 
 SineConfig ShortSine() {
@@ -53,7 +53,8 @@ MJC_VECTOR_TEST(JointApp, TrialRefusedUntilCalibrated) {
   ScriptedIo io;
   VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result ==
                  CommandResult::kRefusedUncalibrated);
-  VT_EXPECT_TRUE(app.SetCalibration(Calibration()).result == CommandResult::kAccepted);
+  VT_EXPECT_TRUE(app.SetCalibration(TestCalibration()).result ==
+                 CommandResult::kAccepted);
   app.ISR_Tick(io);
   VT_EXPECT_TRUE(app.calibrated());
   VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result == CommandResult::kAccepted);
@@ -65,21 +66,32 @@ MJC_VECTOR_TEST(JointApp, TrialRefusedUntilCalibrated) {
 MJC_VECTOR_TEST(JointApp, InvalidCalibrationRefusedWithReasonOldKept) {
   MJC_FRESH_APP(app);
   ScriptedIo io;
-  app.SetCalibration(Calibration());
+  app.SetCalibration(TestCalibration());
   app.ISR_Tick(io);
-  BacklashConfig bad = Calibration();
-  bad.c_left = Angle::FromDouble(0.1);  // left above right
-  const CommandOutcome o = app.SetCalibration(bad);
+  mjc::Calibration bad = TestCalibration();
+  bad.backlash.c_left = Angle::FromDouble(0.1);  // left above right
+  CommandOutcome o = app.SetCalibration(bad);
   VT_EXPECT_TRUE(o.result == CommandResult::kRefusedInvalid);
   VT_EXPECT_EQ(o.detail, static_cast<int>(BacklashConfigError::kLeftAboveRight));
+  bad = TestCalibration();
+  bad.sea_stiffness = Stiffness{};
+  o = app.SetCalibration(bad);
+  VT_EXPECT_TRUE(o.result == CommandResult::kRefusedInvalid);
+  VT_EXPECT_EQ(o.detail, static_cast<int>(CalibrationError::kStiffness));
+  bad = TestCalibration();
+  bad.joint_zero_count = kJointCountsPerRev;
+  o = app.SetCalibration(bad);
+  VT_EXPECT_TRUE(o.result == CommandResult::kRefusedInvalid);
+  VT_EXPECT_EQ(o.detail, static_cast<int>(CalibrationError::kJointZero));
   app.ISR_Tick(io);
-  VT_EXPECT_TRUE(app.control().config().backlash.c_left == Calibration().c_left);
+  VT_EXPECT_TRUE(app.control().config().backlash.c_left ==
+                 TestCalibration().backlash.c_left);
 }
 
 MJC_VECTOR_TEST(JointApp, TrialRunsToCompletionThenIdles) {
   MJC_FRESH_APP(app);
   ScriptedIo io;
-  app.SetCalibration(Calibration());
+  app.SetCalibration(TestCalibration());
   app.ISR_Tick(io);
   app.StartTrial(ShortSine());
   int running_ticks = 0;
@@ -102,7 +114,7 @@ MJC_VECTOR_TEST(JointApp, TrialRunsToCompletionThenIdles) {
 MJC_VECTOR_TEST(JointApp, FaultStopsBridgeInSameTickAndLatches) {
   MJC_FRESH_APP(app);
   ScriptedIo io;
-  app.SetCalibration(Calibration());
+  app.SetCalibration(TestCalibration());
   app.ISR_Tick(io);
   app.StartTrial(ShortSine());
   for (int i = 0; i < 100; ++i) app.ISR_Tick(io);
@@ -127,8 +139,8 @@ MJC_VECTOR_TEST(JointApp, FaultStopsBridgeInSameTickAndLatches) {
   while (app.PopEvent(&e)) {
     if (e.kind == AppEvent::Kind::kFault && e.fault == Fault::kJointParity)
       saw_fault = true;
-    if (e.kind == AppEvent::Kind::kCommandRefused &&
-        e.refusal.result == CommandResult::kRefusedFaultActive) {
+    if (e.kind == AppEvent::Kind::kCommandDone &&
+        e.outcome.result == CommandResult::kRefusedFaultActive) {
       saw_refusal = true;
     }
   }
@@ -138,12 +150,12 @@ MJC_VECTOR_TEST(JointApp, FaultStopsBridgeInSameTickAndLatches) {
 MJC_VECTOR_TEST(JointApp, ConfigurationRefusedUnlessIdle) {
   MJC_FRESH_APP(app);
   ScriptedIo io;
-  app.SetCalibration(Calibration());
+  app.SetCalibration(TestCalibration());
   app.ISR_Tick(io);
   app.StartTrial(ShortSine());
   app.ISR_Tick(io);
   VT_EXPECT_TRUE(app.Configure(ControlConfig{}).result == CommandResult::kRefusedNotIdle);
-  VT_EXPECT_TRUE(app.SetCalibration(Calibration()).result ==
+  VT_EXPECT_TRUE(app.SetCalibration(TestCalibration()).result ==
                  CommandResult::kRefusedNotIdle);
   app.Stop();
   app.ISR_Tick(io);
@@ -153,8 +165,8 @@ MJC_VECTOR_TEST(JointApp, ConfigurationRefusedUnlessIdle) {
 
 MJC_VECTOR_TEST(SpscQueue, FullQueueDropsAndCounts) {
   SpscQueue<int, 4> q;
-  for (int i = 0; i < 4; ++i) VT_EXPECT_TRUE(q.ISR_Push(i));
-  VT_EXPECT_TRUE(!q.ISR_Push(99));
+  for (int i = 0; i < 4; ++i) VT_EXPECT_TRUE(q.Push(i));
+  VT_EXPECT_TRUE(!q.Push(99));
   VT_EXPECT_EQ(q.dropped(), 1u);
   int v = -1;
   for (int i = 0; i < 4; ++i) {

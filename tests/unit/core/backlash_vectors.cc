@@ -143,6 +143,13 @@ MJC_VECTOR_TEST(Backlash, ValidateRefusesBadConfigs) {
                  mjc::BacklashConfigError::kAlphaOutOfRange);
   VT_EXPECT_TRUE(mjc::Validate(MakeConfig(-1.0, 1.0, -1.0)) ==
                  mjc::BacklashConfigError::kAlphaOutOfRange);
+  // 1/α must fit Scale too: α = 1/8 would make the inverse saturate at 8 − 2^-28.
+  VT_EXPECT_TRUE(mjc::Validate(MakeConfig(0.125, 1.0, -1.0)) ==
+                 mjc::BacklashConfigError::kAlphaOutOfRange);
+  VT_EXPECT_TRUE(mjc::Validate(MakeConfig(0.1250001, 1.0, -1.0)) ==
+                 mjc::BacklashConfigError::kOk);
+  VT_EXPECT_TRUE(mjc::Validate(MakeConfig(7.9999999, 1.0, -1.0)) ==
+                 mjc::BacklashConfigError::kOk);
   VT_EXPECT_TRUE(mjc::Validate(MakeConfig(1.0, 40.0, -1.0)) ==
                  mjc::BacklashConfigError::kOffsetOutOfRange);
   VT_EXPECT_TRUE(mjc::Validate(MakeConfig(1.0, -1.0, 1.0)) ==

@@ -179,9 +179,13 @@ MJC_VECTOR_TEST(ControlTick, TickOverrunAndTimeoutStopTheMotor) {
   tick.RequestClearFaults();  // gone in this tick's sample: cleared in the same tick
   r = StepOf(tick, s);
   VT_EXPECT_TRUE(r.clear == FaultClear::kCleared && r.actuation.bridge_enabled);
-  s.command_timeout = true;
+  tick.RaiseCommandTimeout();
   r = StepOf(tick, s);
   VT_EXPECT_TRUE(r.raised == Fault::kCommandTimeout && !r.actuation.bridge_enabled);
+  // An event, not a condition: the next tick's clear succeeds, nothing is left over.
+  tick.RequestClearFaults();
+  r = StepOf(tick, s);
+  VT_EXPECT_TRUE(r.clear == FaultClear::kCleared && r.actuation.bridge_enabled);
 }
 
 MJC_VECTOR_TEST(ControlTick, RefusedConfigKeepsTheOldOne) {

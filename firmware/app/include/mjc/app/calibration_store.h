@@ -65,8 +65,9 @@ class CalibrationStore {
 
 class JointApp;
 
-// At boot: applies the newest valid stored calibration to `app` (idle, just
-// constructed). Returns the loaded record; nullopt leaves the board uncalibrated.
+// At boot: hands the newest valid stored calibration to `app` (idle, just constructed;
+// it takes effect at the first tick). Returns the loaded record; nullopt leaves the
+// board uncalibrated.
 std::optional<CalibrationStore::Loaded> RestoreCalibration(JointApp& app,
                                                            const CalibrationStore& store);
 

@@ -34,52 +34,70 @@ struct CanNodeConfig {
   std::uint16_t energy_hz = 10;
   std::uint16_t control_hz = 10;
   std::uint16_t heartbeat_hz = 10;
-  // Streamed setpoints older than this stop the motor (command timeout, latched).
+  // Streamed setpoints older than this stop the motor (command timeout, latched),
+  // [1, 60000] ms.
   std::uint16_t stream_timeout_ms = 100;
   // Largest setpoint speed while streaming, rad/s.
   AngularVelocity stream_rate = AngularVelocity::FromDouble(2.0);
 };
 
 struct CanNodeCounters {
+  // Every received frame lands in exactly one of these four.
   std::uint32_t handled = 0;
-  std::uint32_t ignored = 0;
-  std::array<std::uint32_t, 6> malformed{};  // by protocol::DecodeError
-  std::uint32_t tx_dropped = 0;              // transmit queue full
+  std::uint32_t ignored = 0;  // another node's, or a board-to-host message
+  std::array<std::uint32_t, protocol::kDecodeErrorCount> malformed{};  // by DecodeError
+  std::uint32_t isotp_malformed = 0;  // on the ISO-TP channel, no valid PCI
+  // Lost on the way out: the transmit queue or the tick's event queue was full.
+  std::uint32_t tx_dropped = 0;
+  std::uint32_t events_dropped = 0;
   std::uint32_t stream_timeouts = 0;
   std::uint32_t isotp_errors = 0;  // transfers dropped (sequence, timeout, overflow)
   std::uint32_t calibrations_accepted = 0;
   std::uint32_t calibrations_refused = 0;
   std::uint32_t storage_failures = 0;
+
+  std::uint32_t received() const {
+    std::uint32_t n = handled + ignored + isotp_malformed;
+    for (const std::uint32_t m : malformed) n += m;
+    return n;
+  }
 };
 
 class CanNode {
  public:
-  // `store` (may be null: nothing persists) keeps every accepted calibration.
+  // `store` (may be null: nothing persists) keeps every applied calibration.
   CanNode(JointApp* app, const CanNodeConfig& config, CalibrationStore* store = nullptr);
 
   // A frame from the bus.
   void HandleFrame(const protocol::CanFrame& frame);
 
-  // Once per control tick (after it), in the main loop: events, telemetry at their
-  // rates, the heartbeat, the stream timeout.
+  // Once per control tick (after it), in the main loop: command verdicts and other
+  // events, telemetry at their rates, the heartbeat, the stream timeout.
   void Poll();
 
   // The driver's side of the transmit queue.
   bool PopTx(protocol::CanFrame* out) { return tx_.Pop(out); }
 
-  const CanNodeCounters& counters() const { return counters_; }
+  CanNodeCounters counters() const;
   const CanNodeConfig& config() const { return config_; }
 
  private:
+  // What a command handed to the app came from, for answering its verdict.
+  enum class Origin : std::uint8_t { kCommand = 1, kParam = 2, kCalibration = 3 };
+
   template <class M>
   void Send(const M& message);
-  void Reply(protocol::CommandCode code, const CommandOutcome& outcome, std::uint8_t seq);
+  void Push(const protocol::CanFrame& frame);
   void HandleCommand(const protocol::Command& c);
   void HandleParam(protocol::ParamId id, bool write, std::int32_t value);
-  void SendEvent(const AppEvent& e);
   void HandleIsoTp(const protocol::CanFrame& frame);
+  // Answers a request the app refused at once, or its verdict from the tick.
+  void Answer(RequestTag tag, const CommandOutcome& outcome);
+  void AnswerCalibration(const CommandOutcome& outcome);
   void ReplyCalibration(protocol::CalibrationResult result, std::uint8_t detail);
-  std::uint32_t NowMs() const;
+  void SendParam(protocol::ParamId id, protocol::ParamStatus status);
+  void SendEvent(const AppEvent& e);
+  void AdvanceClock(std::uint32_t tick);
   bool Due(std::uint16_t hz, std::uint32_t* next_tick);
 
   JointApp* app_;
@@ -90,16 +108,20 @@ class CanNode {
   protocol::SweepConfig sweep_;
   bool have_trial_ = false;
   bool have_sweep_ = false;
-  std::uint8_t last_sequence_ = 0;
-  protocol::CommandCode last_command_ = protocol::CommandCode::kStop;
-  // Schedules, in control ticks.
+  // A parameter write or calibration the tick has not yet answered: the next one waits
+  // (kRefusedBusy), so none is built on a config about to change.
+  bool config_change_pending_ = false;
+  // The calibration awaiting the tick's verdict; saved to the store once applied.
+  protocol::CalibrationRecord pending_record_;
+  // The board's clock: the tick counter, and milliseconds derived from it exactly.
   std::uint32_t now_ = 0;
+  std::uint32_t now_ms_ = 0;
+  std::uint32_t ms_remainder_ = 0;  // tick·1000 not yet a whole millisecond, < tick rate
   std::uint32_t next_angles_ = 0, next_torque_ = 0, next_power_ = 0, next_energy_ = 0,
                 next_control_ = 0, next_heartbeat_ = 0;
   protocol::IsoTpReceiver isotp_;
   CalibrationStore* store_;
-  // Streaming: the tick of the last setpoint; armed while a stream runs.
-  bool streaming_ = false;
+  // Streaming: the tick of the last setpoint (or of the stream's start).
   std::uint32_t last_setpoint_tick_ = 0;
 };
 

@@ -9,10 +9,11 @@
 // (a calibration sweep is what makes the board calibrated).
 //
 // Contexts: commands are submitted from the main loop (CAN, host), validated there, and
-// handed to the tick through a single-producer single-consumer mailbox; ISR_Tick
-// applies them at the start of the next tick, re-checking the state, so nothing races
-// with a fault raised in between. Events (window summaries, faults, state changes,
-// refusals) go back through another SPSC queue.
+// handed to the tick through a single-producer single-consumer mailbox; ISR_Tick takes
+// one at the start of each tick and re-checks the state, so nothing races with a fault
+// raised in between. Every command the mailbox took is answered by one kCommandDone
+// event carrying the submitter's tag and the tick's verdict. Events (command verdicts,
+// window summaries, faults, state changes) go back through another SPSC queue.
 #pragma once
 
 #include <atomic>
@@ -46,50 +47,59 @@ struct CommandOutcome {
   std::uint8_t detail = 0;  // the validating module's stable error code, when invalid
 };
 
+// The submitter's name for a command, returned unchanged with the tick's verdict.
+using RequestTag = std::uint32_t;
+
 struct AppEvent {
   enum class Kind : std::uint8_t {
     kWindow = 1,
     kFault = 2,
     kStateChanged = 3,
-    kCommandRefused = 4,
+    kCommandDone = 4,
   };
   Kind kind = Kind::kStateChanged;
   std::uint32_t tick = 0;
   AppState state = AppState::kIdle;
   Fault fault = Fault::kNone;
-  CommandOutcome refusal;
+  RequestTag tag = 0;      // kCommandDone: the command's tag
+  CommandOutcome outcome;  // kCommandDone: the tick's verdict
   WindowSummary window;
 };
 
 class JointApp {
  public:
-  // Starts idle and uncalibrated with `config` (which must validate). Its backlash
+  // Starts idle and uncalibrated with `config`; an invalid one leaves ControlConfig{}'s
+  // defaults in force (check it with ControlTick::Validate first). Its backlash
   // offsets serve only until SetCalibration(): trials are refused before that.
   explicit JointApp(const ControlConfig& config);
 
   // --- main-loop context -----------------------------------------------------------
-  CommandOutcome Configure(const ControlConfig& config);
-  CommandOutcome SetCalibration(const BacklashConfig& backlash);
-  // A whole calibration: backlash, SEA stiffness 2kr_j² and the joint encoder's zero.
-  CommandOutcome SetCalibration(const BacklashConfig& backlash, Stiffness sea_stiffness,
-                                std::uint16_t joint_zero_count);
-  CommandOutcome StartTrial(const SineConfig& sine);
-  CommandOutcome StartCalibrationSweep(const SweepConfig& sweep);
+  // Each submit validates what it can here and returns the refusal at once; kAccepted
+  // means the tick has the command, and its verdict (applied, or refused because the
+  // state changed meanwhile) follows as a kCommandDone event with `tag`.
+  CommandOutcome Configure(const ControlConfig& config, RequestTag tag = 0);
+  // A calibration (backlash, SEA stiffness 2kr_j², joint encoder zero); refusal detail:
+  // the CalibrationError.
+  CommandOutcome SetCalibration(const Calibration& calibration, RequestTag tag = 0);
+  CommandOutcome StartTrial(const SineConfig& sine, RequestTag tag = 0);
+  CommandOutcome StartCalibrationSweep(const SweepConfig& sweep, RequestTag tag = 0);
   // Streamed setpoints: the setpoint moves toward the latest target at most max_rate
   // (rad/s), starting from the present setpoint. Needs a calibrated, idle board.
-  CommandOutcome StartStream(AngularVelocity max_rate);
+  CommandOutcome StartStream(AngularVelocity max_rate, RequestTag tag = 0);
   // The latest streamed target (rad); takes effect at the next tick. Lock-free: one
   // 32-bit store, read once a tick.
   void SetStreamTarget(Angle target) {
     stream_target_.store(target.raw(), std::memory_order_relaxed);
   }
-  // Set by the CAN side when streamed setpoints stop arriving: the tick's supervisor
-  // sees it as a command timeout (controlled stop, latched).
-  void SetCommandTimeout(bool timed_out) {
-    command_timeout_.store(timed_out, std::memory_order_relaxed);
+  // The CAN side saw the setpoint stream go quiet: the next tick latches
+  // kCommandTimeout (controlled stop). Lock-free and never lost: a counter the tick
+  // compares with the last one it acted on.
+  void RaiseCommandTimeout() {
+    command_timeouts_.store(command_timeouts_.load(std::memory_order_relaxed) + 1,
+                            std::memory_order_release);
   }
-  CommandOutcome Stop();
-  CommandOutcome ClearFaults();
+  CommandOutcome Stop(RequestTag tag = 0);
+  CommandOutcome ClearFaults(RequestTag tag = 0);
 
   bool PopEvent(AppEvent* out) { return events_.Pop(out); }
   std::uint32_t dropped_events() const { return events_.dropped(); }
@@ -104,9 +114,8 @@ class JointApp {
   template <hal::JointIo Io>
   void ISR_Tick(Io& io) {
     ISR_ApplyCommand();
-    Sample sample = io.ISR_Read();
-    if (command_timeout_.load(std::memory_order_relaxed)) sample.command_timeout = true;
-    ISR_FollowStream();
+    const Sample sample = io.ISR_Read();
+    ISR_FollowHost();
     control_.ISR_Step(sample, &result_);
     ISR_AfterStep();
     // A state left in this tick (trial done, stop) disarms before the write.
@@ -126,20 +135,23 @@ class JointApp {
   };
   struct Command {
     CommandKind kind = CommandKind::kStop;
-    ControlConfig config;
+    RequestTag tag = 0;
+    ControlConfig config;  // kConfigure
+    Calibration calibration;
     SineConfig sine;
     SweepConfig sweep;
     AngularVelocity stream_rate;
-    bool full_calibration = false;
   };
 
   CommandOutcome Submit(const Command& command);
-  CommandOutcome SubmitCalibration(const ControlConfig& calibration, bool full);
+  // The checks every start shares: idle, and calibrated unless it is the sweep.
+  CommandOutcome CheckStart(bool needs_calibration) const;
   void ISR_ApplyCommand();
-  void ISR_FollowStream();
+  CommandOutcome ISR_Apply(const Command& c);
+  void ISR_FollowHost();
   void ISR_AfterStep();
   void ISR_Enter(AppState next);
-  void ISR_Refuse(CommandResult result, std::uint8_t detail = 0);
+  void ISR_Done(RequestTag tag, CommandOutcome outcome);
 
   ControlTick control_;
   TickResult result_;
@@ -148,9 +160,11 @@ class JointApp {
   SpscQueue<Command, 4> commands_;
   SpscQueue<AppEvent, 64> events_;
   std::atomic<std::int32_t> stream_target_{0};
-  std::int32_t applied_stream_target_ = 0;
-  AngularVelocity stream_rate_;
-  std::atomic<bool> command_timeout_{false};
+  std::atomic<std::uint32_t> command_timeouts_{0};
+  std::uint32_t command_timeouts_seen_ = 0;
+  // A ClearFaults the tick is judging: answered from ISR_AfterStep.
+  bool clear_pending_ = false;
+  RequestTag clear_tag_ = 0;
 };
 
 }  // namespace mjc::app

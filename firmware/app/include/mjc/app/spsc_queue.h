@@ -1,8 +1,9 @@
-// Single-producer single-consumer ring of fixed capacity, for handing events from the
-// control tick (producer, interrupt context) to the main loop (consumer) without a
-// heap and without disabling interrupts: each index is written by one side only, and
-// 32-bit atomics are single loads/stores on Cortex-M4 (lock-free, no LDREX needed for
-// load/store with acquire/release ordering).
+// Single-producer single-consumer ring of fixed capacity, for handing values between
+// the control tick (interrupt context) and the main loop without a heap and without
+// disabling interrupts, in either direction: commands main loop → tick, events tick →
+// main loop, CAN frames main loop → transmit interrupt. Each index is written by one
+// side only, and 32-bit atomics are single loads/stores on Cortex-M4 (lock-free, no
+// LDREX needed for load/store with acquire/release ordering).
 #pragma once
 
 #include <array>
@@ -20,7 +21,7 @@ class SpscQueue {
  public:
   // Producer side. Returns false (and counts a drop) when full: the producer never
   // waits.
-  bool ISR_Push(const T& value) {
+  bool Push(const T& value) {
     const std::uint32_t head = head_.load(std::memory_order_relaxed);
     const std::uint32_t tail = tail_.load(std::memory_order_acquire);
     if (head - tail == kCapacity) {
@@ -41,6 +42,18 @@ class SpscQueue {
     *out = slots_[tail & (kCapacity - 1)];
     tail_.store(tail + 1, std::memory_order_release);
     return true;
+  }
+
+  // Consumer side, in place: the oldest value (nullptr when empty), valid until
+  // DropFront(). Saves the copy Pop() makes, and costs two loads when empty.
+  const T* Front() const {
+    const std::uint32_t tail = tail_.load(std::memory_order_relaxed);
+    const std::uint32_t head = head_.load(std::memory_order_acquire);
+    return head == tail ? nullptr : &slots_[tail & (kCapacity - 1)];
+  }
+  // Releases the value Front() returned (which must not have been nullptr).
+  void DropFront() {
+    tail_.store(tail_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   }
 
   std::uint32_t dropped() const { return dropped_.load(std::memory_order_relaxed); }

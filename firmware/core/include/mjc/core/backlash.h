@@ -16,10 +16,15 @@
 namespace mjc {
 
 struct BacklashConfig {
-  Scale alpha = Scale::FromDouble(1.0);  // r_m / r_j, legal (0, 8)
+  Scale alpha = Scale::FromDouble(1.0);  // r_m / r_j, legal (1/8, 8)
   Angle c_right = Angle{};  // c_r, rad, [-kMaxBacklashOffset, kMaxBacklashOffset]
   Angle c_left = Angle{};   // c_l, rad, [-kMaxBacklashOffset, c_r]
 };
+
+// α and the inverse model's 1/α both live in Scale (Q3.28, below 8), so α is legal in
+// (1/8, 8); a real Bowden drive has α near 1.
+inline constexpr Scale kMinBacklashAlpha = Scale::FromDouble(0.125);  // exclusive
+inline constexpr Scale kMaxBacklashAlpha = Scale::Max();              // exclusive
 
 // A cable slack offset beyond ±0.5 rad (29°) is not a Bowden cable that works.
 inline constexpr Angle kMaxBacklashOffset = Angle::FromDouble(0.5);

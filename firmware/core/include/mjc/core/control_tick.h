@@ -43,6 +43,36 @@ struct ControlConfig {
   SupervisorConfig supervisor;
 };
 
+// SEA stiffness 2·k·r_j² a config or a calibration may carry: (0, 100] N·m/rad.
+constexpr bool SeaStiffnessValid(Stiffness k) {
+  return k > Stiffness{} && k <= Stiffness(100);
+}
+
+// What a calibration sets (design.md §5): the backlash model, the SEA stiffness and the
+// joint encoder's zero. The rest of ControlConfig is configuration, not calibration.
+struct Calibration {
+  BacklashConfig backlash;
+  Stiffness sea_stiffness = ControlConfig{}.sea_stiffness;
+  std::uint16_t joint_zero_count = 0;  // [0, kJointCountsPerRev)
+
+  // `config` with this calibration's fields.
+  ControlConfig AppliedTo(ControlConfig config) const {
+    config.backlash = backlash;
+    config.sea_stiffness = sea_stiffness;
+    config.joint_encoder.zero_offset = joint_zero_count;
+    return config;
+  }
+};
+
+// A calibration's first invalid field. Stable numbers: the detail of a refused
+// calibration, sent to the host. 1..15 are the BacklashConfigError, passed through.
+enum class CalibrationError : std::uint8_t {
+  kOk = 0,
+  kStiffness = 100,  // outside SeaStiffnessValid
+  kJointZero = 101,  // >= kJointCountsPerRev
+};
+CalibrationError Validate(const Calibration& calibration);
+
 // Why a config was refused; the previous config stays. Stable numbers.
 enum class ControlConfigError : std::uint8_t {
   kOk = 0,
@@ -60,7 +90,6 @@ struct Sample {
   std::uint16_t motor_count = 0;  // quadrature timer count
   std::uint16_t joint_frame = 0;  // the joint encoder's 16-bit SPI read frame
   bool tick_overrun = false;      // the previous tick did not finish in time
-  bool command_timeout = false;   // the host's setpoint stream went quiet
 };
 
 struct Actuation {
@@ -80,7 +109,7 @@ struct Telemetry {
   AngularVelocity joint_velocity;
   Torque aligned_torque;
   Power power;
-  std::int64_t energy_sum = 0;  // Σ P (raw Q24 W·ticks) since the last ClearEnergy()
+  std::int64_t energy_sum = 0;       // Σ P (raw Q24 W·ticks) since the last Configure()
   Segment segment = Segment::kIdle;  // of this tick's setpoint
   Fault fault = Fault::kNone;        // latched fault, kNone when healthy
 };
@@ -108,8 +137,8 @@ class ControlTick {
   // tick's state (the next Step() starts from its sample).
   ControlConfigError Configure(const ControlConfig& config);
 
-  // The validation Configure() applies, without a ControlTick (for the CAN side, which
-  // answers a parameter write before the tick takes it).
+  // The validation Configure() applies, without a ControlTick (for the main loop, which
+  // refuses a config before handing it to the tick).
   static ControlConfigError Validate(const ControlConfig& config);
 
   // Runs one tick (interrupt context). Writes every field of *out except `window`,
@@ -126,10 +155,12 @@ class ControlTick {
   // cause gone (judged before any duty is computed); the outcome is in its
   // TickResult::clear.
   void RequestClearFaults() { clear_requested_ = true; }
+  // The host's setpoint stream went quiet: the next ISR_Step latches kCommandTimeout
+  // (controlled stop). An event, not a condition: nothing is left to clear afterwards.
+  void RaiseCommandTimeout() { command_timeout_raised_ = true; }
   Fault fault() const { return supervisor_.latched(); }
 
   TrajectoryGenerator& trajectory() { return trajectory_; }
-  void ClearEnergy() { energy_.Clear(); }
   std::uint16_t delay_ticks() const { return estimator_.delay_ticks(); }
   EnergyScale energy_scale() const { return EnergyScale(config_.tick_hz); }
   const ControlConfig& config() const { return config_; }
@@ -158,8 +189,11 @@ class ControlTick {
   Supervisor::State supervisor_state_;
   Supervisor supervisor_;
 
+  // Counts every tick since construction, across reconfigurations: the board's clock
+  // (telemetry, window ticks, the CAN side's schedules and timeouts).
   std::uint32_t tick_ = 0;
   bool clear_requested_ = false;
+  bool command_timeout_raised_ = false;
   bool started_ = false;
   bool armed_ = false;
   Angle joint_;  // last good θ_j

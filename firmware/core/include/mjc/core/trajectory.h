@@ -141,6 +141,13 @@ struct SweepConfig {
 // repetitions, rest, setpoint range, velocity range.
 [[nodiscard]] TrajectoryError Validate(const SineConfig& config);
 [[nodiscard]] TrajectoryError Validate(const SweepConfig& config);
+// The checks StartStream applies to its max_rate at tick_rate_hz: kOk,
+// kTickRateOutOfRange, kRateNotPositive or kRateBelowResolution.
+[[nodiscard]] TrajectoryError ValidateStreamRate(AngularVelocity max_rate,
+                                                 std::uint32_t tick_rate_hz);
+// Q = round(f_tick / (4·f)), the ticks of each quarter cycle a sine or sweep at
+// `frequency` runs (see top); for 0 < frequency <= tick_rate_hz/4 (Validate's range).
+std::uint32_t QuarterTicks(Frequency frequency, std::uint32_t tick_rate_hz);
 
 namespace trajectory_detail {
 

@@ -24,6 +24,7 @@
 #include <span>
 
 #include "mjc/core/backlash.h"
+#include "mjc/core/control_tick.h"
 #include "mjc/core/quantities.h"
 
 namespace mjc::protocol {
@@ -48,10 +49,11 @@ enum class CalibrationResult : std::uint8_t {
   kBadMagic = 2,
   kUnsupportedVersion = 3,
   kBadCrc = 4,
-  kOutOfRange = 5,  // detail: the BacklashConfigError, or 100 stiffness, 101 zero count
+  kOutOfRange = 5,  // detail: the CalibrationError (mjc/core/control_tick.h)
   kRefusedNotIdle = 6,
   kReassemblyError = 7,  // the ISO-TP transfer itself failed (sequence, timeout)
   kStorageFailed = 8,    // applied, but writing it to flash failed: not kept over a reset
+  kRefusedBusy = 9,      // the previous calibration or parameter write is still pending
 };
 
 // CRC-32 (reflected polynomial 0xEDB88320, initial and final XOR 0xFFFFFFFF): the

@@ -4,6 +4,7 @@
 // the caller counts it and drops it.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <tuple>
 
@@ -21,6 +22,8 @@ enum class DecodeError : std::uint8_t {
   kFieldOutOfRange = 4,  // a field's raw value is not legal for its type
   kFdFrame = 5,          // an FD frame where a classic one is defined
 };
+inline constexpr std::size_t kDecodeErrorCount =
+    static_cast<std::size_t>(DecodeError::kFdFrame) + 1;
 
 namespace codec_detail {
 

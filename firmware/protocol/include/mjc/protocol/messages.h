@@ -168,8 +168,9 @@ enum class ParamStatus : std::uint8_t {
   kOutOfRange = 2,
   kRefusedNotIdle = 3,
   kReadOnly = 4,
+  kRefusedBusy = 5,  // an earlier write or calibration is still being applied: retry
 };
-constexpr bool ValidEnumValue(ParamStatus s) { return static_cast<std::uint8_t>(s) <= 4; }
+constexpr bool ValidEnumValue(ParamStatus s) { return static_cast<std::uint8_t>(s) <= 5; }
 
 // Energies travel in Q7.24 J (±128 J, 0.06 µJ): a window's energy is millijoules.
 using WireEnergy = Fixed<Joule, 24>;
@@ -225,6 +226,11 @@ struct WindowPeaks {
   Power peak_power;
   Torque peak_torque;
 };
+// WindowTicks carries the peak and the end as 16-bit offsets from the start, so a
+// window (half a cycle) must last at most 65,535 ticks: 77 mHz and up at 10 kHz. A trial
+// or sweep with longer windows is refused (kRefusedInvalid) with this detail, which
+// lies beyond the TrajectoryError numbers.
+inline constexpr std::uint8_t kDetailWindowTooLong = 64;
 struct WindowTicks {
   std::uint32_t start_tick = 0;
   std::uint16_t peak_offset = 0;  // ticks from start

@@ -16,7 +16,6 @@ class SimJointIo {
     s.motor_count = plant_->MotorCount();
     s.joint_frame = plant_->JointFrame();
     s.tick_overrun = overrun_;
-    s.command_timeout = command_timeout_;
     overrun_ = false;
     return s;
   }
@@ -27,15 +26,14 @@ class SimJointIo {
   double duty() const { return actuation_.duty.ToDouble(); }
   bool bridge_enabled() const { return actuation_.bridge_enabled; }
 
-  // Fault injection on the board side: a late tick, a silent host.
+  // Fault injection on the board side: a late tick. (A silent host is the CAN side's
+  // to detect: CanNode raises the command timeout.)
   void InjectOverrun() { overrun_ = true; }
-  void SetCommandTimeout(bool timed_out) { command_timeout_ = timed_out; }
 
  private:
   plant::Plant* plant_;
   Actuation actuation_;
   bool overrun_ = false;
-  bool command_timeout_ = false;
 };
 static_assert(JointIo<SimJointIo>);
 
