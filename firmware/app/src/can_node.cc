@@ -269,7 +269,10 @@ void CanNode::HandleFrame(const CanFrame& frame) {
       return;
     case Function::kHostHeartbeat: {
       HostHeartbeat h;
-      count(Decode(frame, &h));
+      if (count(Decode(frame, &h))) {
+        host_armed_ = true;
+        last_host_tick_ = now_;
+      }
       return;
     }
     default:
@@ -362,6 +365,10 @@ void CanNode::HandleParam(ParamId id, bool write, std::int32_t value) {
     case ParamId::kStreamTimeoutMs:
       own = &config_.stream_timeout_ms;
       low = 1;
+      high = 60000;
+      break;
+    case ParamId::kHostTimeoutMs:
+      own = &config_.host_timeout_ms;
       high = 60000;
       break;
     default:
@@ -483,6 +490,11 @@ bool CanNode::Due(std::uint16_t hz, std::uint32_t* next_tick) {
   return true;
 }
 
+void CanNode::OnBusOff() {
+  ++counters_.bus_off;
+  app_->RaiseFault(Fault::kCanBusOff);
+}
+
 void CanNode::Poll() {
   const TickResult& r = app_->last();
   AdvanceClock(r.telemetry.tick);
@@ -499,9 +511,22 @@ void CanNode::Poll() {
   if (streaming &&
       now_ - last_setpoint_tick_ >
           TicksFromMs(config_.stream_timeout_ms, app_->control().config().tick_hz)) {
-    app_->RaiseCommandTimeout();  // the next tick latches kCommandTimeout
+    app_->RaiseFault(Fault::kCommandTimeout);  // the next tick latches it
     ++counters_.stream_timeouts;
     last_setpoint_tick_ = now_;  // once: the fault ends the stream
+  }
+  const bool moving =
+      app_->state() == AppState::kRunning || app_->state() == AppState::kCalibrating;
+  const bool host_quiet =
+      host_armed_ && config_.host_timeout_ms != 0 &&
+      now_ - last_host_tick_ >
+          TicksFromMs(config_.host_timeout_ms, app_->control().config().tick_hz);
+  if (host_quiet) {
+    host_armed_ = false;  // once; the next heartbeat arms it again
+    if (moving) {
+      app_->RaiseFault(Fault::kHostHeartbeatLost);
+      ++counters_.host_timeouts;
+    }
   }
 
   const Telemetry& t = r.telemetry;

@@ -99,11 +99,9 @@ CommandOutcome JointApp::ClearFaults(RequestTag tag) {
 }
 
 void JointApp::ISR_FollowHost() {
-  const std::uint32_t timeouts = command_timeouts_.load(std::memory_order_acquire);
-  if (timeouts != command_timeouts_seen_) {
-    command_timeouts_seen_ = timeouts;
-    control_.RaiseCommandTimeout();
-  }
+  const auto raised =
+      static_cast<Fault>(raised_fault_.exchange(0, std::memory_order_acquire));
+  if (raised != Fault::kNone) control_.RaiseExternalFault(raised);
   if (control_.trajectory().mode() == TrajectoryMode::kStream) {
     (void)control_.trajectory().SetStreamTarget(
         Angle::FromRaw(stream_target_.load(std::memory_order_relaxed)));

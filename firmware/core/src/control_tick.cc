@@ -149,8 +149,8 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   in.joint_velocity = velocity;
   in.applied_duty = last_duty_;
   in.tick_overrun = sample.tick_overrun;
-  in.command_timeout = command_timeout_raised_;
-  command_timeout_raised_ = false;
+  in.external = external_fault_;
+  external_fault_ = Fault::kNone;
   r.clear = FaultClear::kNone;
   if (clear_requested_) {
     clear_requested_ = false;

@@ -19,7 +19,7 @@ Fault Supervisor::Evaluate(const SupervisorInput& in, bool with_history) const {
   if (Abs(in.torque) > c.torque_max) return Fault::kTorqueLimit;
   if (Abs(in.joint_velocity) > c.velocity_max) return Fault::kVelocityLimit;
   if (in.tick_overrun) return Fault::kTickOverrun;
-  if (in.command_timeout) return Fault::kCommandTimeout;
+  if (in.external != Fault::kNone) return in.external;
   return Fault::kNone;
 }
 

@@ -272,4 +272,75 @@ MJC_VECTOR_TEST(CanNode, ParameterWritesKeepTheClockAndTelemetryRunning) {
   VT_EXPECT_TRUE(Last<Heartbeat>(vt_context, b).tick > tick_before + 1000);
 }
 
+// A trial long enough to outlast the tests below: 0.5 Hz, 5 repetitions.
+void StartLongTrial(Board& b, std::uint8_t sequence) {
+  TrialConfig t;
+  t.amplitude = Angle::FromDouble(0.2);
+  t.frequency_mHz = 500;
+  t.repetitions = 5;
+  t.rest_100ms = 0;
+  b.node.HandleFrame(Encode(t, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, sequence}, 1));
+  b.Run(1);
+}
+
+MJC_VECTOR_TEST(CanNode, LostHostHeartbeatStopsAMotionButNotARest) {
+  static Board b;
+  Calibrate(b);
+  // A host that never sends heartbeats is not supervised.
+  StartLongTrial(b, 1);
+  b.Run(5000);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  b.node.HandleFrame(Encode(Command{CommandCode::kStop, 2}, 1));
+  b.Run(2);
+  // A supervising host: heartbeats every 100 ms keep the trial running...
+  StartLongTrial(b, 3);
+  for (int i = 0; i < 20; ++i) {
+    b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i)}, 1));
+    b.Run(1000);
+  }
+  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  // ...and their loss stops it within the 300 ms timeout plus a tick.
+  int ticks = 0;
+  while (b.app.state() == AppState::kRunning && ticks < 10000) {
+    b.Run(1);
+    ++ticks;
+  }
+  VT_EXPECT_TRUE(ticks <= 3000 - 1000 + 2);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
+  VT_EXPECT_TRUE(!b.io.written.bridge_enabled);
+  VT_EXPECT_TRUE(Last<FaultEvent>(vt_context, b).fault == Fault::kHostHeartbeatLost);
+  VT_EXPECT_EQ(b.node.counters().host_timeouts, 1u);
+  b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 4}, 1));
+  b.Run(2);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  // A host that goes quiet while the board rests faults nothing, and the next motion
+  // (from a tool without heartbeats) is not supervised by the stale ones.
+  b.node.HandleFrame(Encode(HostHeartbeat{30}, 1));
+  b.Run(5000);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  StartLongTrial(b, 5);
+  b.Run(5000);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_EQ(b.node.counters().host_timeouts, 1u);
+}
+
+MJC_VECTOR_TEST(CanNode, BusOffStopsTheMotorInTheNextTickAndIsCounted) {
+  static Board b;
+  Calibrate(b);
+  StartLongTrial(b, 1);
+  b.Run(1000);
+  VT_EXPECT_TRUE(b.io.written.bridge_enabled);
+  b.node.OnBusOff();
+  b.Run(1);
+  VT_EXPECT_TRUE(!b.io.written.bridge_enabled);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
+  VT_EXPECT_TRUE(Last<FaultEvent>(vt_context, b).fault == Fault::kCanBusOff);
+  VT_EXPECT_EQ(b.node.counters().bus_off, 1u);
+  // The bus is back: the host's clear is accepted.
+  b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 2}, 1));
+  b.Run(2);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+}
+
 }  // namespace

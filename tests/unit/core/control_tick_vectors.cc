@@ -179,13 +179,21 @@ MJC_VECTOR_TEST(ControlTick, TickOverrunAndTimeoutStopTheMotor) {
   tick.RequestClearFaults();  // gone in this tick's sample: cleared in the same tick
   r = StepOf(tick, s);
   VT_EXPECT_TRUE(r.clear == FaultClear::kCleared && r.actuation.bridge_enabled);
-  tick.RaiseCommandTimeout();
+  // Faults raised outside the tick: latched by the very next tick; events, not
+  // conditions: the following tick's clear succeeds, nothing is left over.
+  for (const Fault f :
+       {Fault::kCommandTimeout, Fault::kHostHeartbeatLost, Fault::kCanBusOff}) {
+    tick.RaiseExternalFault(f);
+    r = StepOf(tick, s);
+    VT_EXPECT_TRUE(r.raised == f && !r.actuation.bridge_enabled);
+    tick.RequestClearFaults();
+    r = StepOf(tick, s);
+    VT_EXPECT_TRUE(r.clear == FaultClear::kCleared && r.actuation.bridge_enabled);
+  }
+  // Only those: a sensor or limit code raised from outside is ignored.
+  tick.RaiseExternalFault(Fault::kTorqueLimit);
   r = StepOf(tick, s);
-  VT_EXPECT_TRUE(r.raised == Fault::kCommandTimeout && !r.actuation.bridge_enabled);
-  // An event, not a condition: the next tick's clear succeeds, nothing is left over.
-  tick.RequestClearFaults();
-  r = StepOf(tick, s);
-  VT_EXPECT_TRUE(r.clear == FaultClear::kCleared && r.actuation.bridge_enabled);
+  VT_EXPECT_TRUE(r.raised == Fault::kNone && r.actuation.bridge_enabled);
 }
 
 MJC_VECTOR_TEST(ControlTick, RefusedConfigKeepsTheOldOne) {

@@ -108,7 +108,7 @@ void CheckVisibleCauseLifecycle(mjc::vt::Context& vt_context,
   }
   SupervisorInput other = healthy;
   other.tick_overrun = want != Fault::kTickOverrun;
-  other.command_timeout = want == Fault::kTickOverrun;
+  other.external = want == Fault::kTickOverrun ? Fault::kCommandTimeout : Fault::kNone;
   if (rig.Check(other) != want) ++not_latched;
   VT_EXPECT_EQ(not_latched, 0);
   VT_EXPECT_EQ(rig.state.fault_tick, fault_tick);
@@ -193,9 +193,23 @@ MJC_VECTOR_TEST(SupervisorFault, TickOverrun) {
 
 MJC_VECTOR_TEST(SupervisorFault, CommandTimeout) {
   SupervisorInput faulty = Rest();
-  faulty.command_timeout = true;
+  faulty.external = Fault::kCommandTimeout;
   CheckVisibleCauseLifecycle(vt_context, Rest(), faulty, Fault::kCommandTimeout);
   VT_EXPECT_EQ(F(Fault::kCommandTimeout), 301);
+}
+
+MJC_VECTOR_TEST(SupervisorFault, HostHeartbeatLost) {
+  SupervisorInput faulty = Rest();
+  faulty.external = Fault::kHostHeartbeatLost;
+  CheckVisibleCauseLifecycle(vt_context, Rest(), faulty, Fault::kHostHeartbeatLost);
+  VT_EXPECT_EQ(F(Fault::kHostHeartbeatLost), 302);
+}
+
+MJC_VECTOR_TEST(SupervisorFault, CanBusOff) {
+  SupervisorInput faulty = Rest();
+  faulty.external = Fault::kCanBusOff;
+  CheckVisibleCauseLifecycle(vt_context, Rest(), faulty, Fault::kCanBusOff);
+  VT_EXPECT_EQ(F(Fault::kCanBusOff), 303);
 }
 
 MJC_VECTOR_TEST(SupervisorFault, JointJump) {
@@ -266,7 +280,7 @@ MJC_VECTOR_TEST(SupervisorFault, JointStuck) {
     // Clear with a visible cause is refused; Clear at the stuck reading succeeds and
     // the stuck history restarts from it: the motor needs another 0.6 rad.
     SupervisorInput bad = Sample(0.3, m0 + rate * (first - 1));
-    bad.command_timeout = true;
+    bad.external = Fault::kCommandTimeout;
     VT_EXPECT_TRUE(!rig.supervisor.Clear(bad));
     const SupervisorInput clearing = Sample(0.3, m0 + rate * (first - 1));
     VT_EXPECT_TRUE(rig.supervisor.Clear(clearing));
@@ -487,7 +501,7 @@ MJC_VECTOR_TEST(Supervisor, SimultaneousCausesReportTheFirstInRangeOrder) {
   // then each reported cause removed in turn: the next is the next in range order.
   SupervisorInput in = Sample(1.7, 2.1, 1.5, 6.0, 0.9);
   in.tick_overrun = true;
-  in.command_timeout = true;
+  in.external = Fault::kCommandTimeout;
   in.joint_status = JointFrameStatus::kParityError;
   const Fault order[] = {Fault::kJointParity,     Fault::kJointErrorFlag,
                          Fault::kJointJump,       Fault::kJointAngleLimit,
@@ -527,7 +541,7 @@ MJC_VECTOR_TEST(Supervisor, SimultaneousCausesReportTheFirstInRangeOrder) {
         in.tick_overrun = false;
         break;
       case Fault::kCommandTimeout:
-        in.command_timeout = false;
+        in.external = Fault::kNone;
         break;
       default:
         break;

@@ -37,6 +37,12 @@ struct CanNodeConfig {
   // Streamed setpoints older than this stop the motor (command timeout, latched),
   // [1, 60000] ms.
   std::uint16_t stream_timeout_ms = 100;
+  // Host supervision: once a HostHeartbeat has been seen, a motion (calibration sweep,
+  // trial, stream) that hears none for this long is stopped (kHostHeartbeatLost,
+  // latched). Disarmed when the board is at rest and the host quiet, so a tool that
+  // sends no heartbeats is never supervised. [0, 60000] ms, 0 = off; the default
+  // tolerates two lost heartbeats at the host's 10 Hz.
+  std::uint16_t host_timeout_ms = 300;
   // Largest setpoint speed while streaming, rad/s.
   AngularVelocity stream_rate = AngularVelocity::FromDouble(2.0);
 };
@@ -51,6 +57,8 @@ struct CanNodeCounters {
   std::uint32_t tx_dropped = 0;
   std::uint32_t events_dropped = 0;
   std::uint32_t stream_timeouts = 0;
+  std::uint32_t host_timeouts = 0;
+  std::uint32_t bus_off = 0;  // bus-off events the driver reported (each one stops us)
   std::uint32_t isotp_errors = 0;  // transfers dropped (sequence, timeout, overflow)
   std::uint32_t calibrations_accepted = 0;
   std::uint32_t calibrations_refused = 0;
@@ -77,6 +85,13 @@ class CanNode {
 
   // The driver's side of the transmit queue.
   bool PopTx(protocol::CanFrame* out) { return tx_.Pop(out); }
+
+  // The driver saw its controller go bus-off (main loop context). The board can no
+  // longer hear a stop, so the motor stops (kCanBusOff, latched) and the event is
+  // counted; the driver restarts the controller (bus-off recovery: 128 × 11 recessive
+  // bits) and the queued frames go out once it is back. Clearing the fault needs a
+  // ClearFaults from the host, which proves the bus works again.
+  void OnBusOff();
 
   CanNodeCounters counters() const;
   const CanNodeConfig& config() const { return config_; }
@@ -123,6 +138,9 @@ class CanNode {
   CalibrationStore* store_;
   // Streaming: the tick of the last setpoint (or of the stream's start).
   std::uint32_t last_setpoint_tick_ = 0;
+  // Host supervision: armed by a HostHeartbeat, tick of the last one.
+  bool host_armed_ = false;
+  std::uint32_t last_host_tick_ = 0;
 };
 
 }  // namespace mjc::app

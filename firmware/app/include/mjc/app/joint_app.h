@@ -91,12 +91,14 @@ class JointApp {
   void SetStreamTarget(Angle target) {
     stream_target_.store(target.raw(), std::memory_order_relaxed);
   }
-  // The CAN side saw the setpoint stream go quiet: the next tick latches
-  // kCommandTimeout (controlled stop). Lock-free and never lost: a counter the tick
-  // compares with the last one it acted on.
-  void RaiseCommandTimeout() {
-    command_timeouts_.store(command_timeouts_.load(std::memory_order_relaxed) + 1,
-                            std::memory_order_release);
+  // The CAN side saw the setpoint stream or the host go quiet, or the bus go off
+  // (IsExternalFault codes; others are ignored): the next tick latches the fault and
+  // stops the motor. Lock-free and never lost: the tick takes the pending code with
+  // one atomic exchange. Two raised before one tick latch the later one.
+  void RaiseFault(Fault fault) {
+    if (IsExternalFault(fault)) {
+      raised_fault_.store(static_cast<std::uint16_t>(fault), std::memory_order_release);
+    }
   }
   CommandOutcome Stop(RequestTag tag = 0);
   CommandOutcome ClearFaults(RequestTag tag = 0);
@@ -160,8 +162,8 @@ class JointApp {
   SpscQueue<Command, 4> commands_;
   SpscQueue<AppEvent, 64> events_;
   std::atomic<std::int32_t> stream_target_{0};
-  std::atomic<std::uint32_t> command_timeouts_{0};
-  std::uint32_t command_timeouts_seen_ = 0;
+  std::atomic<std::uint16_t> raised_fault_{0};  // a Fault code, 0 = none
+  static_assert(std::atomic<std::uint16_t>::is_always_lock_free);
   // A ClearFaults the tick is judging: answered from ISR_AfterStep.
   bool clear_pending_ = false;
   RequestTag clear_tag_ = 0;

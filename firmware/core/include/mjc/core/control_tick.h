@@ -155,9 +155,13 @@ class ControlTick {
   // cause gone (judged before any duty is computed); the outcome is in its
   // TickResult::clear.
   void RequestClearFaults() { clear_requested_ = true; }
-  // The host's setpoint stream went quiet: the next ISR_Step latches kCommandTimeout
-  // (controlled stop). An event, not a condition: nothing is left to clear afterwards.
-  void RaiseCommandTimeout() { command_timeout_raised_ = true; }
+  // A fault seen outside the tick (IsExternalFault: the setpoint stream or the host
+  // went quiet, the bus went off): the next ISR_Step latches it and stops the motor.
+  // An event, not a condition: nothing is left to clear afterwards. Other codes are
+  // ignored.
+  void RaiseExternalFault(Fault fault) {
+    if (IsExternalFault(fault)) external_fault_ = fault;
+  }
   Fault fault() const { return supervisor_.latched(); }
 
   TrajectoryGenerator& trajectory() { return trajectory_; }
@@ -193,7 +197,7 @@ class ControlTick {
   // (telemetry, window ticks, the CAN side's schedules and timeouts).
   std::uint32_t tick_ = 0;
   bool clear_requested_ = false;
-  bool command_timeout_raised_ = false;
+  Fault external_fault_ = Fault::kNone;
   bool started_ = false;
   bool armed_ = false;
   Angle joint_;  // last good θ_j

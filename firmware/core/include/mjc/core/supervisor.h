@@ -25,10 +25,18 @@ enum class Fault : std::uint16_t {
   kMotorAngleLimit = 201,
   kTorqueLimit = 202,
   kVelocityLimit = 203,
-  // 300–399: timing and commands
-  kTickOverrun = 300,     // the previous tick did not finish in its period
-  kCommandTimeout = 301,  // streamed setpoints stopped arriving
+  // 300–399: timing and communication
+  kTickOverrun = 300,        // the previous tick did not finish in its period
+  kCommandTimeout = 301,     // streamed setpoints stopped arriving
+  kHostHeartbeatLost = 302,  // the supervising host went quiet during a motion
+  kCanBusOff = 303,          // the CAN controller went bus-off: the host cannot stop us
 };
+
+// The faults the main loop raises (it sees the bus; the tick does not).
+constexpr bool IsExternalFault(Fault f) {
+  return f == Fault::kCommandTimeout || f == Fault::kHostHeartbeatLost ||
+         f == Fault::kCanBusOff;
+}
 
 struct SupervisorConfig {
   Angle joint_min = Angle::FromDouble(-1.6);  // rad
@@ -60,7 +68,9 @@ struct SupervisorInput {
   AngularVelocity joint_velocity;
   Duty applied_duty;  // the duty applied over the previous tick
   bool tick_overrun = false;
-  bool command_timeout = false;
+  // Raised by the main loop for this one tick (an event, not a condition: nothing is
+  // left to clear afterwards). Only IsExternalFault() codes.
+  Fault external = Fault::kNone;
 };
 
 class Supervisor {

@@ -37,6 +37,8 @@ constexpr bool ValidEnumValue(Fault f) {
     case Fault::kVelocityLimit:
     case Fault::kTickOverrun:
     case Fault::kCommandTimeout:
+    case Fault::kHostHeartbeatLost:
+    case Fault::kCanBusOff:
       return true;
   }
   return false;
@@ -122,10 +124,11 @@ enum class ParamId : std::uint16_t {
   kTelemetryControlHz = 0x0104,
   kHeartbeatHz = 0x0105,
   kStreamTimeoutMs = 0x0110,
-  kPositionKp = 0x0200,   // Q16, duty per rad
-  kPositionKi = 0x0201,   // Q16, duty per rad·s
-  kPositionKd = 0x0202,   // Q16, duty per rad/s
-  kPositionKff = 0x0203,  // Q16, duty per rad/s
+  kHostTimeoutMs = 0x0111,  // 0 = host heartbeats not supervised
+  kPositionKp = 0x0200,     // Q16, duty per rad
+  kPositionKi = 0x0201,     // Q16, duty per rad·s
+  kPositionKd = 0x0202,     // Q16, duty per rad/s
+  kPositionKff = 0x0203,    // Q16, duty per rad/s
   kVelocityWindow = 0x0210,
   kTorqueMax = 0x0300,  // Q24 N·m
   // The calibration in force, read-only (uploads go over ISO-TP as a whole record).
@@ -145,6 +148,7 @@ constexpr bool ValidEnumValue(ParamId id) {
     case ParamId::kTelemetryControlHz:
     case ParamId::kHeartbeatHz:
     case ParamId::kStreamTimeoutMs:
+    case ParamId::kHostTimeoutMs:
     case ParamId::kPositionKp:
     case ParamId::kPositionKi:
     case ParamId::kPositionKd:
