@@ -159,13 +159,13 @@ MJC_VECTOR_TEST(CanNode, SilentStreamStopsTheMotorAndLatches) {
   }
   VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
   VT_EXPECT_TRUE(b.io.written.bridge_enabled);
-  // Then silence: stopped within the 100 ms timeout plus one tick, latched.
+  // Then silence: stopped within the 50 ms timeout plus two ticks, latched.
   int ticks = 0;
   while (b.app.state() == AppState::kRunning && ticks < 2000) {
     b.Run(1);
     ++ticks;
   }
-  VT_EXPECT_TRUE(ticks <= 1000 - 50 + 2);
+  VT_EXPECT_TRUE(ticks <= 500 - 50 + 2);
   VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
   VT_EXPECT_TRUE(!b.io.written.bridge_enabled);
   VT_EXPECT_TRUE(Last<FaultEvent>(vt_context, b).fault == Fault::kCommandTimeout);

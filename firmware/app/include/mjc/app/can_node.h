@@ -35,8 +35,10 @@ struct CanNodeConfig {
   std::uint16_t control_hz = 10;
   std::uint16_t heartbeat_hz = 10;
   // Streamed setpoints older than this stop the motor (command timeout, latched),
-  // [1, 60000] ms.
-  std::uint16_t stream_timeout_ms = 100;
+  // [1, 60000] ms. The default stops a motor whose host went quiet within 50.2 ms (the
+  // timeout, the main loop's poll, the next tick), under the 100 ms goal for lost
+  // commands, while a host streaming at 100 Hz may miss four setpoints.
+  std::uint16_t stream_timeout_ms = 50;
   // Host supervision: once a HostHeartbeat has been seen, a motion (calibration sweep,
   // trial, stream) that hears none for this long is stopped (kHostHeartbeatLost,
   // latched). Disarmed when the board is at rest and the host quiet, so a tool that
