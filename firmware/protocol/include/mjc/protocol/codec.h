@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "mjc/protocol/can_frame.h"
+#include "mjc/protocol/little_endian.h"
 #include "mjc/protocol/messages.h"
 
 namespace mjc::protocol {
@@ -67,8 +68,10 @@ constexpr CanFrame Encode(const M& message, std::uint8_t node) {
   CanFrame frame;
   frame.id = IdOf<M>(node);
   frame.length = Message<M>::kLength;
-  std::apply([&](const auto&... s) { (s.Pack(message, frame.data.data()), ...); },
+  std::uint64_t word = 0;
+  std::apply([&](const auto&... s) { (s.Pack(message, &word), ...); },
              Message<M>::kSignals);
+  PutLe(frame.data.data(), word, Message<M>::kLength);
   return frame;
 }
 
@@ -84,13 +87,11 @@ constexpr DecodeError Decode(const CanFrame& frame, M* out) {
   if (node < kMinNode || node > kMaxNode) return DecodeError::kBadNode;
   if (frame.fd) return DecodeError::kFdFrame;
   if (frame.length != Message<M>::kLength) return DecodeError::kWrongLength;
+  const std::uint64_t word = GetLe(frame.data.data(), Message<M>::kLength);
   M decoded{};
   bool ok = true;
-  std::apply(
-      [&](const auto&... s) {
-        ((ok = ok && s.Unpack(frame.data.data(), &decoded)), ...);
-      },
-      Message<M>::kSignals);
+  std::apply([&](const auto&... s) { ((ok = ok && s.Unpack(word, &decoded)), ...); },
+             Message<M>::kSignals);
   if (!ok) return DecodeError::kFieldOutOfRange;
   *out = decoded;
   return DecodeError::kOk;
