@@ -4,6 +4,7 @@
 // measures the markers' own cost, which the script subtracts. Built NO_HEAP and
 // NO_DOUBLE: it is also the link-time proof that the core needs neither.
 #include "core_kernels.h"
+#include "mjc/app/can_node.h"
 #include "mjc/core/control_tick.h"
 #include "mjc/core/position_loop.h"
 #include "semihost.h"
@@ -83,6 +84,26 @@ void ControlTick100() {
   g_out = g_result.telemetry.power.raw();
 }
 
+// The main loop's CAN work, which shares the core with the tick: one received frame
+// of each kind the bus can bring (another board's, a malformed one, a setpoint, a
+// parameter read that needs a reply) and the heaviest Poll (every telemetry message
+// and the heartbeat due at once). With the tick's count these bound the work per
+// 100 µs under a full-rate flood (./bench: flood_instructions_per_tick).
+app::JointApp g_app{ControlConfig{}};
+app::CanNode g_node{&g_app, app::CanNodeConfig{}};
+protocol::CanFrame g_frames[4];
+
+void DrainTx() {
+  protocol::CanFrame f;
+  while (g_node.PopTx(&f)) {
+  }
+}
+void FrameForeign() { g_node.HandleFrame(g_frames[0]); }
+void FrameMalformed() { g_node.HandleFrame(g_frames[1]); }
+void FrameSetpoint() { g_node.HandleFrame(g_frames[2]); }
+void FrameParamRead() { g_node.HandleFrame(g_frames[3]); }
+void PollAllDue() { g_node.Poll(); }
+
 struct Entry {
   const char* name;
   void (*run)();
@@ -97,6 +118,11 @@ constexpr Entry kEntries[] = {
     {"eigen_matvec3", MatVec3},
     {"control_tick", ControlTick1},
     {"control_tick_x100", ControlTick100},
+    {"can_frame_foreign", FrameForeign},
+    {"can_frame_malformed", FrameMalformed},
+    {"can_frame_setpoint", FrameSetpoint},
+    {"can_frame_param_read", FrameParamRead},
+    {"can_poll_all_due", PollAllDue},
 };
 
 // Formats v in decimal: no printf here (newlib's stdio allocates).
@@ -150,7 +176,17 @@ void SetUpTick(ControlTick& tick) {
   if (tick.trajectory().StartSine(sine) != TrajectoryError::kOk) qemu::SemihostExit(3);
 }
 
+void SetUpCan() {
+  using namespace mjc::protocol;
+  g_frames[0] = Encode(TelemetryAngles{Angle::FromRaw(12345), Angle::FromRaw(-678)}, 2);
+  g_frames[1] = Encode(Setpoint{Angle::FromRaw(0), 0}, 1);
+  g_frames[1].length = 3;
+  g_frames[2] = Encode(Setpoint{Angle::FromRaw(1 << 20), 7}, 1);
+  g_frames[3] = Encode(ParamRead{ParamId::kPositionKp}, 1);
+}
+
 void SetUp() {
+  SetUpCan();
   SetUpTick(g_tick);
   SetUpTick(g_shadow);
   for (int i = 0; i < 600; ++i) StepOnce();  // fill the velocity window
@@ -178,6 +214,7 @@ int main() {
     mjc_bench_begin();
     e.run();
     mjc_bench_end();
+    DrainTx();
   }
   // A thousand more ticks (several window completions) for the high-water mark.
   g_setpoint = g_result.telemetry.setpoint;

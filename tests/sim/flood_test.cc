@@ -1,0 +1,189 @@
+// A trial under a full-rate frame flood: besides the host's own traffic, the board's
+// CAN node receives two more frames every 100 µs tick (20,000 frames/s, about what
+// CAN FD at 1/5 Mbit/s carries with 8-byte payloads) — other boards' telemetry,
+// commands for other nodes, malformed frames for this node, parameter reads that each
+// need a reply, and random identifiers and lengths. The trial must complete with every
+// window, its energies as close to the plant's truth as without the flood, no fault,
+// and every received frame accounted for by the node's counters.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include "mjc/app/can_node.h"
+#include "mjc/host/trial_runner.h"
+#include "mjc/plant/params.h"
+#include "mjc/sim/scenarios.h"
+
+namespace {
+
+using namespace mjc;
+using namespace mjc::protocol;
+
+// The flood's frames, in a fixed rotation so every kind is equally represented.
+class Flood {
+ public:
+  explicit Flood(std::uint8_t node) : node_(node) {}
+
+  CanFrame Next() {
+    const std::uint8_t other = static_cast<std::uint8_t>(2 + (n_ % 7));  // nodes 2..8
+    CanFrame f;
+    switch (n_++ % 6) {
+      case 0:  // another board's telemetry
+        f = Encode(TelemetryAngles{Angle::FromRaw(static_cast<std::int32_t>(rng_())),
+                                   Angle::FromRaw(static_cast<std::int32_t>(rng_()))},
+                   other);
+        break;
+      case 1:  // the host commanding another node
+        f = Encode(Command{CommandCode::kStop, static_cast<std::uint8_t>(n_)}, other);
+        break;
+      case 2:  // a truncated setpoint for this node
+        f = Encode(Setpoint{Angle::FromRaw(0), 0}, node_);
+        f.length = 3;
+        ++malformed_sent_;
+        break;
+      case 3:  // a parameter read for this node: every one needs a reply
+        f = Encode(ParamRead{ParamId::kTelemetryAnglesHz}, node_);
+        ++param_reads_sent_;
+        break;
+      case 4:  // an unused function code for this node
+        f.id = MakeId(0x7F, node_);
+        f.length = 8;
+        break;
+      default: {  // anything for another node: a random identifier, length, payload
+        do {
+          f.id = static_cast<std::uint32_t>(rng_()) & 0x7FFu;
+        } while (NodeOf(f.id) == node_);
+        f.length = static_cast<std::uint8_t>(rng_() % 9);
+        for (auto& b : f.data) b = static_cast<std::uint8_t>(rng_());
+        break;
+      }
+    }
+    return f;
+  }
+  std::uint32_t malformed_sent() const { return malformed_sent_; }
+  std::uint32_t param_reads_sent() const { return param_reads_sent_; }
+
+ private:
+  std::uint8_t node_;
+  std::uint32_t n_ = 0;
+  std::uint32_t malformed_sent_ = 0;
+  std::uint32_t param_reads_sent_ = 0;
+  std::mt19937 rng_{20261121};
+};
+
+TEST(Flood, TrialUnderFullRateFloodKeepsEveryWindowAndCountsEveryFrame) {
+  constexpr int kFloodPerTick = 2;
+  auto bus = host::InProcessBus::Create();
+  auto board_link = bus->Connect();
+  auto host_link = bus->Connect();
+
+  plant::PlantParams params = plant::LoadPlantParams("default");
+  params.integration.max_step_s = 33.4e-6;
+  params.interface = plant::LoadPlantParams("subject1").interface;
+  sim::SimBoard board(params, sim::DefaultBoardConfig());
+  Calibration cal;
+  cal.backlash.c_right = Angle::Quantize(params.cable.c_right_rad);
+  cal.backlash.c_left = Angle::Quantize(params.cable.c_left_rad);
+  board.app().SetCalibration(cal);
+  board.Tick();
+  app::CanNode node(&board.app(), app::CanNodeConfig{});
+
+  std::mutex truth_mutex;
+  std::vector<double> truth_energy;  // index: board tick
+  std::atomic<bool> stop{false};
+  Flood flood(1);
+  std::uint32_t from_host = 0;
+  std::uint32_t flooded = 0;
+  std::uint32_t param_replies = 0;
+  std::uint32_t ticks = 0;
+  std::uint32_t tick_gaps = 0;  // ticks whose counter did not advance by exactly one
+  bool faulted = false;
+  std::thread board_thread([&] {
+    std::string why;
+    std::uint32_t last_tick = board.app().last().telemetry.tick;
+    while (!stop) {
+      while (auto f = board_link->Receive(0)) {
+        node.HandleFrame(f->frame);
+        ++from_host;
+      }
+      for (int i = 0; i < kFloodPerTick; ++i) {
+        node.HandleFrame(flood.Next());
+        ++flooded;
+      }
+      {
+        std::lock_guard lock(truth_mutex);
+        const std::uint32_t tick = board.app().last().telemetry.tick + 1;
+        if (truth_energy.size() <= tick) truth_energy.resize(tick + 1, 0.0);
+        truth_energy[tick] = board.plant().truth().interface_energy_J;
+      }
+      board.Tick();
+      ++ticks;
+      const std::uint32_t tick = board.app().last().telemetry.tick;
+      if (tick != last_tick + 1) ++tick_gaps;
+      last_tick = tick;
+      faulted = faulted || board.app().state() == app::AppState::kFault;
+      node.Poll();
+      CanFrame out;
+      while (node.PopTx(&out)) {
+        if (FunctionOf(out.id) == static_cast<std::uint8_t>(Function::kParamValue)) {
+          ++param_replies;
+        }
+        board_link->Send(out, &why);
+      }
+    }
+  });
+
+  host::BoardClient client(host_link.get(), 1);
+  TrialConfig config;
+  config.amplitude = Angle::Quantize(15.0 * 3.14159265358979323846 / 180.0);
+  config.frequency_mHz = 500;
+  config.repetitions = 5;
+  config.rest_100ms = 5;
+  const host::BoardTrial trial = host::RunBoardTrial(
+      client, config, [](const host::BoardWindow&) {}, 120.0);
+  stop = true;
+  board_thread.join();
+
+  ASSERT_TRUE(trial.completed) << trial.error;
+  EXPECT_FALSE(faulted);
+  EXPECT_EQ(tick_gaps, 0u);
+  EXPECT_EQ(trial.windows.size(), 10u);
+  // The flood really was full rate for the whole trial.
+  EXPECT_EQ(flooded, kFloodPerTick * ticks);
+  EXPECT_GT(flooded, 2u * 5 * 20000);  // five 2 s cycles at 20,000 frames/s at least
+
+  // Every received frame accounted for, each kind where it belongs.
+  const app::CanNodeCounters c = node.counters();
+  EXPECT_EQ(c.received(), from_host + flooded);
+  // The truncated setpoints, and nothing else (the host sends no malformed frames).
+  EXPECT_EQ(c.malformed[static_cast<int>(DecodeError::kWrongLength)],
+            flood.malformed_sent());
+  EXPECT_EQ(c.tx_dropped, 0u);
+  EXPECT_EQ(c.events_dropped, 0u);
+  // Every parameter read answered (the flood's, and the host's own few).
+  EXPECT_GE(param_replies, flood.param_reads_sent());
+
+  std::printf(
+      "flood: %u ticks, %u flood + %u host frames received, %u malformed, "
+      "%u ignored, %u parameter replies, %u dropped\n",
+      ticks, flooded, from_host, c.malformed[static_cast<int>(DecodeError::kWrongLength)],
+      c.ignored, param_replies, c.tx_dropped + c.events_dropped);
+
+  const auto flexions = host::MiddleFlexions(trial.windows, 5);
+  ASSERT_EQ(flexions.size(), 3u);
+  for (const host::BoardWindow& w : flexions) {
+    ASSERT_LT(w.end_tick, truth_energy.size());
+    const double load = truth_energy[w.peak_tick] - truth_energy[w.start_tick];
+    const double unload = truth_energy[w.end_tick] - truth_energy[w.peak_tick];
+    EXPECT_NEAR(w.loading_J, load, 0.02 * load) << "repetition " << w.repetition;
+    EXPECT_NEAR(w.unloading_J, unload, 0.02 * load) << "repetition " << w.repetition;
+  }
+}
+
+}  // namespace
