@@ -55,6 +55,9 @@ ControlConfigError ControlTick::Validate(const ControlConfig& config) {
   position.tick_hz = config.tick_hz;
   if (mjc::Validate(position) != PositionLoopError::kOk)
     return ControlConfigError::kPositionLoop;
+  if (mjc::Validate(config.supervisor) != SupervisorConfigError::kOk) {
+    return ControlConfigError::kSupervisor;
+  }
   return ControlConfigError::kOk;
 }
 
@@ -91,7 +94,6 @@ ControlConfigError ControlTick::Configure(const ControlConfig& config) {
 
 void ControlTick::Restart() {
   started_ = false;
-  motor_state_.Clear();
   backlash_state_.Clear();
   inverse_state_.Clear();
   loop_state_.Clear();
@@ -112,7 +114,10 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   r.raised = Fault::kNone;
 
   // 1. Sensors.
-  if (!started_) motor_encoder_.Reset(sample.motor_count);
+  if (!motor_started_) {
+    motor_encoder_.Reset(sample.motor_count);
+    motor_started_ = true;
+  }
   const Angle motor = motor_encoder_.Update(sample.motor_count);
   const JointSample joint_sample =
       DecodeJointFrame(sample.joint_frame, config_.joint_encoder);

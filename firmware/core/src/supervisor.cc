@@ -2,6 +2,19 @@
 
 namespace mjc {
 
+SupervisorConfigError Validate(const SupervisorConfig& c) {
+  using E = SupervisorConfigError;
+  if (c.joint_min >= c.joint_max) return E::kJointRange;
+  if (c.motor_min >= c.motor_max) return E::kMotorRange;
+  if (c.torque_max <= Torque{}) return E::kTorqueMax;
+  if (c.velocity_max <= AngularVelocity{}) return E::kVelocityMax;
+  if (c.joint_jump_max <= Angle{}) return E::kJointJumpMax;
+  if (c.stuck_motor_travel <= Angle{}) return E::kStuckTravel;
+  if (c.stuck_duty <= Duty{}) return E::kStuckDuty;
+  if (c.motor_stuck_ticks == 0) return E::kMotorStuckTicks;
+  return E::kOk;
+}
+
 Fault Supervisor::Evaluate(const SupervisorInput& in, bool with_history) const {
   const SupervisorConfig& c = *config_;
   if (in.joint_status == JointFrameStatus::kParityError) return Fault::kJointParity;

@@ -200,6 +200,12 @@ MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kVelocityWindow, 500}, 1));  // even
   b.Run(1);
   VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOutOfRange);
+  // A torque limit no sample can meet would latch a fault on every tick: refused.
+  const Torque torque_max = b.app.control().config().supervisor.torque_max;
+  b.node.HandleFrame(Encode(ParamWrite{ParamId::kTorqueMax, -(1 << 24)}, 1));
+  b.Run(1);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOutOfRange);
+  VT_EXPECT_TRUE(b.app.control().config().supervisor.torque_max == torque_max);
   Calibrate(b);
   b.node.HandleFrame(Encode(Command{CommandCode::kStartStream, 5}, 1));
   b.Run(1);

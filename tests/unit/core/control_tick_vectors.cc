@@ -209,8 +209,34 @@ MJC_VECTOR_TEST(ControlTick, RefusedConfigKeepsTheOldOne) {
   bad = c;
   bad.sea_stiffness = Stiffness{};
   VT_EXPECT_TRUE(tick.Configure(bad) == ControlConfigError::kStiffness);
+  bad = c;
+  bad.supervisor.torque_max = Torque::FromDouble(-1.0);  // would fault every tick
+  VT_EXPECT_TRUE(tick.Configure(bad) == ControlConfigError::kSupervisor);
   VT_EXPECT_TRUE(tick.config().backlash.c_left == c.backlash.c_left);
   VT_EXPECT_EQ(tick.delay_ticks(), 250);
+}
+
+MJC_VECTOR_TEST(ControlTick, ReconfiguringKeepsTheMotorAngle) {
+  // The pulley rests at −0.1 rad (the timer's unsigned count just below 65,536) when a
+  // calibration or parameter write reconfigures the tick: the angle must carry on, not
+  // restart from the raw count (+1.9 rad, beyond the motor limit: a false fault).
+  static ControlTick tick;
+  VT_EXPECT_TRUE(tick.Configure(PaperConfig()) == ControlConfigError::kOk);
+  const double rad_per_count = 2 * kPi / (2048.0 * 100.0);
+  const auto counts = static_cast<std::int32_t>(std::lround(-0.1 / rad_per_count));
+  Sample s;
+  s.joint_frame = EncodeJointFrame(0, false);
+  for (std::int32_t c = 0; c >= counts; c -= 16) {  // 0.5 rad/s
+    s.motor_count = static_cast<std::uint16_t>(c & 0xFFFF);
+    StepOf(tick, s);
+  }
+  s.motor_count = static_cast<std::uint16_t>(counts & 0xFFFF);
+  const TickResult before = StepOf(tick, s);
+  VT_EXPECT_NEAR(before.telemetry.motor.ToDouble(), counts * rad_per_count, 1e-6);
+  VT_EXPECT_TRUE(tick.Configure(PaperConfig()) == ControlConfigError::kOk);
+  const TickResult after = StepOf(tick, s);
+  VT_EXPECT_NEAR(after.telemetry.motor.ToDouble(), counts * rad_per_count, 1e-6);
+  VT_EXPECT_TRUE(after.raised == Fault::kNone);
 }
 
 }  // namespace

@@ -129,6 +129,36 @@ void CheckVisibleCauseLifecycle(mjc::vt::Context& vt_context,
 // A joint resting at 0.3 rad against a little torque, motor pulley 0.32 rad.
 SupervisorInput Rest() { return Sample(0.3, 0.32); }
 
+MJC_VECTOR_TEST(Supervisor, ConfigsThatWouldLatchOrHideFaultsAreRefused) {
+  using mjc::SupervisorConfig;
+  using E = mjc::SupervisorConfigError;
+  VT_EXPECT_TRUE(mjc::Validate(SupervisorConfig{}) == E::kOk);
+  SupervisorConfig c;
+  c.joint_min = c.joint_max;
+  VT_EXPECT_TRUE(mjc::Validate(c) == E::kJointRange);
+  c = {};
+  c.motor_max = Angle::FromDouble(-2.5);
+  VT_EXPECT_TRUE(mjc::Validate(c) == E::kMotorRange);
+  c = {};
+  c.torque_max = mjc::Torque{};
+  VT_EXPECT_TRUE(mjc::Validate(c) == E::kTorqueMax);
+  c = {};
+  c.velocity_max = AngularVelocity::FromDouble(-1.0);
+  VT_EXPECT_TRUE(mjc::Validate(c) == E::kVelocityMax);
+  c = {};
+  c.joint_jump_max = Angle{};
+  VT_EXPECT_TRUE(mjc::Validate(c) == E::kJointJumpMax);
+  c = {};
+  c.stuck_motor_travel = Angle{};
+  VT_EXPECT_TRUE(mjc::Validate(c) == E::kStuckTravel);
+  c = {};
+  c.stuck_duty = Duty{};
+  VT_EXPECT_TRUE(mjc::Validate(c) == E::kStuckDuty);
+  c = {};
+  c.motor_stuck_ticks = 0;
+  VT_EXPECT_TRUE(mjc::Validate(c) == E::kMotorStuckTicks);
+}
+
 MJC_VECTOR_TEST(SupervisorFault, JointParity) {
   SupervisorInput faulty = Rest();
   faulty.joint_status = JointFrameStatus::kParityError;

@@ -83,6 +83,7 @@ enum class ControlConfigError : std::uint8_t {
   kStiffness = 5,
   kVelocityWindow = 6,
   kPositionLoop = 7,
+  kSupervisor = 8,
 };
 
 // What the hardware (or the simulator) read at the start of the tick.
@@ -199,6 +200,10 @@ class ControlTick {
   bool clear_requested_ = false;
   Fault external_fault_ = Fault::kNone;
   bool started_ = false;
+  // The motor count is extended from the first tick since construction and never
+  // restarted: the quadrature timer keeps counting through a reconfiguration, and
+  // restarting from its raw unsigned value would read a pulley at −0.1 rad as +1.9.
+  bool motor_started_ = false;
   bool armed_ = false;
   Angle joint_;  // last good θ_j
   std::uint16_t joint_count_ = 0;

@@ -57,6 +57,22 @@ struct SupervisorConfig {
   std::uint32_t motor_stuck_ticks = 2000;  // 200 ms at 10 kHz
 };
 
+// A SupervisorConfig's first invalid field. Stable numbers. A limit that no healthy
+// sample can meet (an empty angle range, a limit at or below zero) would latch a fault
+// on every tick; one that is never checked would hide a fault: both are refused.
+enum class SupervisorConfigError : std::uint8_t {
+  kOk = 0,
+  kJointRange = 1,      // joint_min >= joint_max
+  kMotorRange = 2,      // motor_min >= motor_max
+  kTorqueMax = 3,       // <= 0
+  kVelocityMax = 4,     // <= 0
+  kJointJumpMax = 5,    // <= 0
+  kStuckTravel = 6,     // <= 0
+  kStuckDuty = 7,       // <= 0
+  kMotorStuckTicks = 8  // 0
+};
+SupervisorConfigError Validate(const SupervisorConfig& config);
+
 // What the supervisor looks at each tick.
 struct SupervisorInput {
   JointFrameStatus joint_status = JointFrameStatus::kOk;
