@@ -17,6 +17,7 @@ class SimJointIo {
     s.joint_frame = plant_->JointFrame();
     s.tick_overrun = overrun_;
     overrun_ = false;
+    last_sample_ = s;
     return s;
   }
 
@@ -30,10 +31,16 @@ class SimJointIo {
   // to detect: CanNode raises the command timeout.)
   void InjectOverrun() { overrun_ = true; }
 
+  // The words the last ISR_Read() returned, i.e. exactly what the firmware saw this
+  // tick. Fault tests judge a fault's first faulty sample on these (a joint read draws
+  // fresh noise, so the plant cannot be asked again), not on the firmware's verdict.
+  const Sample& last_sample() const { return last_sample_; }
+
  private:
   plant::Plant* plant_;
   Actuation actuation_;
   bool overrun_ = false;
+  Sample last_sample_;
 };
 static_assert(JointIo<SimJointIo>);
 
