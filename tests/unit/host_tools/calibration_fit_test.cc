@@ -151,7 +151,13 @@ TEST_P(BacklashFitRecovery, RecoversOffsetsWithinProductGoal) {
   EXPECT_NEAR(fit.c_right_rad, c.truth.c_right_deg * kDeg, kOffsetGoalRad);
   EXPECT_NEAR(fit.c_left_rad, c.truth.c_left_deg * kDeg, kOffsetGoalRad);
   EXPECT_LE(fit.c_left_rad, fit.c_right_rad);
-  EXPECT_NEAR(fit.alpha, c.truth.alpha, kAlphaGoalRelative * c.truth.alpha);
+  if (c.fit_alpha) {
+    // Fitted from a start of 1.0: recovering the truth is the check.
+    EXPECT_NEAR(fit.alpha, c.truth.alpha, kAlphaGoalRelative * c.truth.alpha);
+  } else {
+    // A fixed α (the truth here) must come back exactly as given, not refitted.
+    EXPECT_EQ(fit.alpha, options.alpha);
+  }
   // The optimiser reached the optimum: no worse than the truth on the same data. With
   // a decimated local stage the optimum is that of the kept samples, a hair off the
   // whole record's.
@@ -170,6 +176,7 @@ INSTANTIATE_TEST_SUITE_P(
                       FitCase{"BothNegative10kHz", {-0.3, -2.4}, false, 10000.0},
                       FitCase{"WideSlack1kHz", {4.0, -3.0}, false, 1000.0},
                       FitCase{"NoSlack1kHz", {0.4, 0.4}, false, 1000.0},
+                      FitCase{"AlphaFixedOffUnity1kHz", {1.3, -0.9, 1.08}, false, 1000.0},
                       FitCase{"AlphaFitted1kHz", {1.3, -0.9, 1.08}, true, 1000.0},
                       FitCase{"AlphaFitted10kHz", {0.6, -1.7, 0.93}, true, 10000.0}),
     [](const ::testing::TestParamInfo<FitCase>& param_info) {
@@ -359,12 +366,17 @@ TEST(BacklashFitRefuses, BadOptions) {
   BacklashFitOptions options;
   options.alpha = 0.0;
   ExpectRefused(Fit(sweep, options),
-                "options.alpha = 0.000000 is outside the legal range");
+                "options.alpha = 0.000000 is outside the legal range (1/8, 8)");
+  options.alpha = 0.125;
+  ExpectRefused(Fit(sweep, options), "options.alpha = 0.125000");
   options = {};
   options.fit_alpha = true;
   options.alpha_min = 1.5;
   options.alpha_max = 1.2;
-  ExpectRefused(Fit(sweep, options), "0 < alpha_min < alpha_max < 8");
+  ExpectRefused(Fit(sweep, options), "1/8 < alpha_min < alpha_max < 8");
+  options.alpha_min = 0.1;
+  options.alpha_max = 1.2;
+  ExpectRefused(Fit(sweep, options), "1/8 < alpha_min < alpha_max < 8");
   options = {};
   options.min_engaged_fraction = 0.0;
   ExpectRefused(Fit(sweep, options), "min_engaged_fraction");
@@ -403,9 +415,13 @@ TEST(ToFirmwareConfig, RefusesLeftAboveRight) {
 }
 
 TEST(ToFirmwareConfig, RefusesAlphaOutsideTheLegalRange) {
-  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 9.0), "alpha = 9.000000", "(0, 8)");
-  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 0.0), "alpha = 0.000000", "(0, 8)");
-  ExpectConversionRefused(ConvergedFit(1.0, -1.0, -1.0), "alpha", "(0, 8)");
+  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 9.0), "alpha = 9.000000", "(1/8, 8)");
+  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 0.0), "alpha = 0.000000", "(1/8, 8)");
+  ExpectConversionRefused(ConvergedFit(1.0, -1.0, -1.0), "alpha", "(1/8, 8)");
+  // Below 1/8 the inverse model's 1/α would not fit the firmware's Q3.28 Scale.
+  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 0.125), "alpha = 0.125000", "(1/8, 8)");
+  std::string why;
+  EXPECT_TRUE(ToFirmwareConfig(ConvergedFit(1.0, -1.0, 0.126), &why)) << why;
 }
 
 TEST(ToFirmwareConfig, RefusesNonFiniteAndUnconvergedFits) {
