@@ -74,7 +74,12 @@ void AddCalibrate(CLI::App& app, int* status) {
     bool answered = false;
     const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(1);
     while (!answered && std::chrono::steady_clock::now() < until) {
-      const auto r = link->Receive(50);
+      const auto r = link->Receive(50, &why);
+      if (r.status == host::ReceiveStatus::kError) {
+        std::fprintf(stderr, "mjc calibrate: %s\n", why.c_str());
+        *status = 1;
+        return;
+      }
       protocol::CommandResult result;
       if (r && Decode(r->frame, &result) == DecodeError::kOk &&
           result.sequence == sequence) {
@@ -102,7 +107,12 @@ void AddCalibrate(CLI::App& app, int* status) {
     std::fprintf(stderr, "mjc calibrate: sweeping %.0f° over %d cycles at %.2f Hz...\n",
                  amplitude_deg, cycles, frequency_hz);
     while (!done && std::chrono::steady_clock::now() < deadline) {
-      const auto r = link->Receive(100);
+      const auto r = link->Receive(100, &why);
+      if (r.status == host::ReceiveStatus::kError) {
+        std::fprintf(stderr, "mjc calibrate: %s\n", why.c_str());
+        *status = 1;
+        return;
+      }
       if (!r) continue;
       TelemetryAngles a;
       Heartbeat hb;

@@ -3,6 +3,7 @@
 // signal in physical units (one row a signal).
 #include <atomic>
 #include <chrono>
+#include <cinttypes>
 #include <csignal>
 #include <cstdio>
 #include <tuple>
@@ -19,12 +20,17 @@ using namespace mjc::protocol;
 std::atomic<bool> g_stop{false};
 void OnSignal(int) { g_stop = true; }
 
+// "1712345678.000123": the kernel's timestamp, exact to the microsecond.
+std::string Seconds(const host::ReceivedFrame& r) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%010" PRId64 ".%06" PRId64, r.timestamp_us / 1000000,
+                r.timestamp_us % 1000000);
+  return text;
+}
+
 void WriteCandump(std::FILE* out, const std::string& iface,
                   const host::ReceivedFrame& r) {
-  const auto sec = static_cast<long long>(r.timestamp_s);
-  const auto usec =
-      static_cast<long long>((r.timestamp_s - static_cast<double>(sec)) * 1e6);
-  std::fprintf(out, "(%010lld.%06lld) %s %03X%s", sec, usec, iface.c_str(), r.frame.id,
+  std::fprintf(out, "(%s) %s %03X%s", Seconds(r).c_str(), iface.c_str(), r.frame.id,
                r.frame.fd ? "##0" : "#");
   for (int i = 0; i < r.frame.length; ++i)
     std::fprintf(out, "%02X", r.frame.data[static_cast<std::size_t>(i)]);
@@ -37,14 +43,14 @@ bool WriteSignals(std::FILE* out, const host::ReceivedFrame& r) {
     return false;
   M m;
   if (Decode(r.frame, &m) != DecodeError::kOk) {
-    std::fprintf(out, "%.6f,%03X,%u,%s,malformed,\n", r.timestamp_s, r.frame.id,
+    std::fprintf(out, "%s,%03X,%u,%s,malformed,\n", Seconds(r).c_str(), r.frame.id,
                  NodeOf(r.frame.id), Message<M>::kName);
     return true;
   }
   std::apply(
       [&](const auto&... s) {
         ((std::fprintf(
-             out, "%.6f,%03X,%u,%s,%s,%.12g\n", r.timestamp_s, r.frame.id,
+             out, "%s,%03X,%u,%s,%s,%.12g\n", Seconds(r).c_str(), r.frame.id,
              NodeOf(r.frame.id), Message<M>::kName, s.name,
              static_cast<double>(std::decay_t<decltype(s)>::Wire::ToRaw(m.*(s.member))) *
                  s.factor())),
@@ -60,7 +66,7 @@ void WriteCsv(std::FILE* out, const host::ReceivedFrame& r) {
       [&](auto... m) { ((known = known || WriteSignals<decltype(m)>(out, r)), ...); },
       AllMessages{});
   if (!known) {
-    std::fprintf(out, "%.6f,%03X,%u,other,length,%u\n", r.timestamp_s, r.frame.id,
+    std::fprintf(out, "%s,%03X,%u,other,length,%u\n", Seconds(r).c_str(), r.frame.id,
                  NodeOf(r.frame.id), r.frame.length);
   }
 }
@@ -100,6 +106,7 @@ void AddLog(CLI::App& app, int* status) {
     const auto deadline =
         std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     long written = 0;
+    bool link_failed = false;
     // SIGINT/SIGTERM end the recording cleanly: the file is flushed and the counts
     // printed, so a stopped logger loses nothing it received.
     std::signal(SIGINT, OnSignal);
@@ -107,6 +114,10 @@ void AddLog(CLI::App& app, int* status) {
     while (!g_stop && (frames == 0 || written < frames) &&
            (seconds == 0 || std::chrono::steady_clock::now() < deadline)) {
       const auto r = link->Receive(100, &why);
+      if (r.status == host::ReceiveStatus::kError) {
+        link_failed = true;
+        break;
+      }
       if (!r) continue;
       if (format == "csv") {
         WriteCsv(out, *r);
@@ -118,7 +129,8 @@ void AddLog(CLI::App& app, int* status) {
     if (out != stdout) std::fclose(out);
     std::fprintf(stderr, "mjc log: %ld frames, %llu dropped by the kernel\n", written,
                  static_cast<unsigned long long>(link->stats().rx_dropped));
-    *status = 0;
+    if (link_failed) std::fprintf(stderr, "mjc log: %s\n", why.c_str());
+    *status = link_failed ? 1 : 0;
   });
 }
 

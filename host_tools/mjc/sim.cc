@@ -93,7 +93,13 @@ void AddSim(CLI::App& app, int* status) {
     const double period = board.tick_period_s();
     std::uint64_t ticks = 0;
     while (!g_stop && (seconds == 0 || static_cast<double>(ticks) * period < seconds)) {
-      while (auto f = link->Receive(0)) can.HandleFrame(f->frame);
+      host::ReceiveResult r;
+      while ((r = link->Receive(0, &why))) can.HandleFrame(r->frame);
+      if (r.status == host::ReceiveStatus::kError) {
+        std::fprintf(stderr, "mjc sim: %s\n", why.c_str());
+        *status = 1;
+        return;
+      }
       board.Tick();
       can.Poll();
       protocol::CanFrame out;

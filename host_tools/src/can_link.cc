@@ -98,15 +98,6 @@ std::unique_ptr<SocketCanLink> SocketCanLink::Open(const std::string& interface,
 
 SocketCanLink::~SocketCanLink() { ::close(fd_); }
 
-bool SocketCanLink::ReceiveOwn(bool on, std::string* why) {
-  const int value = on ? 1 : 0;
-  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &value, sizeof value) < 0) {
-    Say(why, Errno("'" + interface_ + "': CAN_RAW_RECV_OWN_MSGS"));
-    return false;
-  }
-  return true;
-}
-
 bool SocketCanLink::DoSend(const protocol::CanFrame& frame, std::string* why) {
   canfd_frame raw{};
   raw.can_id = frame.id & CAN_SFF_MASK;
@@ -140,7 +131,7 @@ bool SocketCanLink::DoSend(const protocol::CanFrame& frame, std::string* why) {
   return false;
 }
 
-std::optional<ReceivedFrame> SocketCanLink::DoReceive(int timeout_ms, std::string* why) {
+ReceiveResult SocketCanLink::DoReceive(int timeout_ms, std::string* why) {
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
   for (;;) {
@@ -157,40 +148,38 @@ std::optional<ReceivedFrame> SocketCanLink::DoReceive(int timeout_ms, std::strin
     if (n < 0) {
       if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
         Say(why, Errno("cannot receive on '" + interface_ + "'"));
-        return std::nullopt;
+        return {ReceiveStatus::kError, {}};
       }
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
                             deadline - std::chrono::steady_clock::now())
                             .count();
-      if (left <= 0) return std::nullopt;
+      if (left <= 0) return {ReceiveStatus::kTimeout, {}};
       bool error = false;
-      if (!WaitFor(fd_, POLLIN, static_cast<int>(left), &error)) {
-        if (error) Say(why, Errno("poll on '" + interface_ + "'"));
-        if (error) return std::nullopt;
+      if (!WaitFor(fd_, POLLIN, static_cast<int>(left), &error) && error) {
+        Say(why, Errno("poll on '" + interface_ + "'"));
+        return {ReceiveStatus::kError, {}};
       }
       continue;
     }
     if (raw.can_id & CAN_ERR_FLAG) {
       ++stats_.error_frames;
-      if (raw.can_id & CAN_ERR_BUSOFF) {
-        ++stats_.bus_off;
-        bus_off_ = true;
-      }
+      if (raw.can_id & CAN_ERR_BUSOFF) ++stats_.bus_off;
       continue;
     }
     if (raw.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG)) continue;  // not our protocol's
-    ReceivedFrame out;
-    out.frame.id = raw.can_id & CAN_SFF_MASK;
-    out.frame.length = raw.len;
-    out.frame.fd = n == static_cast<ssize_t>(CANFD_MTU);
-    std::memcpy(out.frame.data.data(), raw.data, std::min<std::size_t>(raw.len, 64));
+    ReceiveResult out{ReceiveStatus::kFrame, {}};
+    ReceivedFrame& r = out.received;
+    r.frame.id = raw.can_id & CAN_SFF_MASK;
+    r.frame.length = raw.len;
+    r.frame.fd = n == static_cast<ssize_t>(CANFD_MTU);
+    std::memcpy(r.frame.data.data(), raw.data, std::min<std::size_t>(raw.len, 64));
     for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr;
          c = CMSG_NXTHDR(&message, c)) {
       if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_TIMESTAMP) {
         timeval tv{};
         std::memcpy(&tv, CMSG_DATA(c), sizeof tv);
-        out.timestamp_s =
-            static_cast<double>(tv.tv_sec) + static_cast<double>(tv.tv_usec) * 1e-6;
+        r.timestamp_us = std::int64_t{tv.tv_sec} * 1000000 + tv.tv_usec;
+        r.timestamp_s = static_cast<double>(r.timestamp_us) * 1e-6;
       } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
         std::uint32_t dropped = 0;  // the socket's cumulative drop count
         std::memcpy(&dropped, CMSG_DATA(c), sizeof dropped);
@@ -198,7 +187,6 @@ std::optional<ReceivedFrame> SocketCanLink::DoReceive(int timeout_ms, std::strin
       }
     }
     ++stats_.received;
-    bus_off_ = false;
     return out;
   }
 }
@@ -240,27 +228,30 @@ class InProcessLink final : public CanLink {
   }
   bool DoSend(const protocol::CanFrame& frame, std::string*) override {
     std::lock_guard lock(bus_->mutex_);
-    const double now =
-        std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-            .count();
+    ReceivedFrame sent;
+    sent.frame = frame;
+    sent.timestamp_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                            std::chrono::system_clock::now().time_since_epoch())
+                            .count();
+    sent.timestamp_s = static_cast<double>(sent.timestamp_us) * 1e-6;
     for (InProcessLink* other : bus_->links_) {
-      if (other != this && other->Passes(frame)) other->queue_.push_back({frame, now});
+      if (other != this && other->Passes(frame)) other->queue_.push_back(sent);
     }
     ++stats_.sent;
     bus_->arrived_.notify_all();
     return true;
   }
-  std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string*) override {
+  ReceiveResult DoReceive(int timeout_ms, std::string*) override {
     std::unique_lock lock(bus_->mutex_);
     if (timeout_ms > 0) {  // a zero timeout only looks: no timed wait, no syscall
       bus_->arrived_.wait_for(lock, std::chrono::milliseconds(timeout_ms),
                               [this] { return !queue_.empty(); });
     }
-    if (queue_.empty()) return std::nullopt;
-    ReceivedFrame f = queue_.front();
+    if (queue_.empty()) return {ReceiveStatus::kTimeout, {}};
+    ReceiveResult out{ReceiveStatus::kFrame, queue_.front()};
     queue_.pop_front();
     ++stats_.received;
-    return f;
+    return out;
   }
   bool DoSetFilters(std::span<const IdFilter> filters, std::string*) override {
     std::lock_guard lock(bus_->mutex_);
@@ -332,7 +323,10 @@ std::optional<std::vector<std::uint8_t>> IsoTpLink::Receive(int timeout_ms,
   std::vector<std::uint8_t> buffer(4096);
   const ssize_t n = ::read(fd_, buffer.data(), buffer.size());
   if (n < 0) {
-    Say(why, Errno("ISO-TP receive on '" + interface_ + "'"));
+    // ECOMM: our last transfer failed because the peer sent no flow control in time.
+    Say(why, errno == ECOMM ? "no ISO-TP flow control from the peer on '" + interface_ +
+                                  "' (absent or silent)"
+                            : Errno("ISO-TP receive on '" + interface_ + "'"));
     return std::nullopt;
   }
   buffer.resize(static_cast<std::size_t>(n));

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 #include "mjc/protocol/codec.h"
 
 namespace {
@@ -53,7 +55,24 @@ TEST(InProcessBus, FiltersAndTimeouts) {
   const auto got = host->Receive(100);
   ASSERT_TRUE(got);
   EXPECT_EQ(got->frame.data[0], 2);
-  EXPECT_FALSE(host->Receive(20));
+  const auto none = host->Receive(20);
+  EXPECT_FALSE(none);
+  EXPECT_EQ(none.status, ReceiveStatus::kTimeout);  // a quiet bus is not an error
+}
+
+TEST(InProcessBus, TimestampsAreMicrosecondsOfTheRealtimeClock) {
+  auto bus = InProcessBus::Create();
+  auto a = bus->Connect();
+  auto b = bus->Connect();
+  std::string why;
+  const auto before = std::chrono::duration_cast<std::chrono::microseconds>(
+                          std::chrono::system_clock::now().time_since_epoch())
+                          .count();
+  ASSERT_TRUE(a->Send(Frame(0x201, 1), &why));
+  const auto got = b->Receive(100);
+  ASSERT_TRUE(got);
+  EXPECT_GE(got->timestamp_us, before);
+  EXPECT_LT(got->timestamp_us, before + 1000000);
 }
 
 TEST(SocketCanLink, RefusesWithAReasonWhenThereIsNoCan) {

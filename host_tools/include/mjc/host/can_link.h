@@ -3,8 +3,9 @@
 // InProcessBus connects links inside one process for unit tests. IsoTpLink moves
 // multi-frame payloads (calibration records) through the kernel's CAN_ISOTP.
 //
-// Errors never throw: Open returns nullptr and Send/Receive return false or nullopt,
-// each with a reason in `why` naming the interface and the system's message.
+// Errors never throw: Open returns nullptr, Send returns false and Receive a result
+// that says whether it timed out or failed, each with a reason in `why` naming the
+// interface and the system's message.
 #pragma once
 
 #include <condition_variable>
@@ -23,7 +24,29 @@ namespace mjc::host {
 
 struct ReceivedFrame {
   protocol::CanFrame frame;
-  double timestamp_s = 0;  // kernel receive time (SO_TIMESTAMP), CLOCK_REALTIME seconds
+  // Kernel receive time (SO_TIMESTAMP): CLOCK_REALTIME microseconds since the epoch,
+  // exactly as the kernel reports it (a candump log prints it digit for digit).
+  std::int64_t timestamp_us = 0;
+  // The same in seconds, for arithmetic only: a double of today's Unix time resolves
+  // ~0.2 µs, so it does not convert back to the exact microsecond.
+  double timestamp_s = 0;
+};
+
+enum class ReceiveStatus : std::uint8_t {
+  kFrame = 0,    // a frame arrived
+  kTimeout = 1,  // none within the timeout
+  kError = 2,    // the socket failed (the reason is in `why`)
+};
+
+// What Receive returns: a frame, or why there is none. Tests true only for a frame; *
+// and -> reach the frame (a default one unless status is kFrame).
+struct ReceiveResult {
+  ReceiveStatus status = ReceiveStatus::kTimeout;
+  ReceivedFrame received;
+
+  explicit operator bool() const { return status == ReceiveStatus::kFrame; }
+  const ReceivedFrame& operator*() const { return received; }
+  const ReceivedFrame* operator->() const { return &received; }
 };
 
 struct LinkStats {
@@ -53,8 +76,9 @@ class CanLink {
   }
 
   // The next data frame that passes the filters, waiting up to timeout_ms (0: only what
-  // is already there); nullopt on timeout or error (then *why says which, when given).
-  std::optional<ReceivedFrame> Receive(int timeout_ms, std::string* why = nullptr) {
+  // is already there). On kError *why (when given) says what failed; the link is then
+  // unusable and the caller should stop.
+  ReceiveResult Receive(int timeout_ms, std::string* why = nullptr) {
     return DoReceive(timeout_ms, why);
   }
 
@@ -64,16 +88,13 @@ class CanLink {
   }
 
   const LinkStats& stats() const { return stats_; }
-  // True after a bus-off error frame, until the next successful receive of data.
-  bool bus_off() const { return bus_off_; }
 
  protected:
   LinkStats stats_;
-  bool bus_off_ = false;
 
  private:
   virtual bool DoSend(const protocol::CanFrame& frame, std::string* why) = 0;
-  virtual std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string* why) = 0;
+  virtual ReceiveResult DoReceive(int timeout_ms, std::string* why) = 0;
   virtual bool DoSetFilters(std::span<const IdFilter> filters, std::string* why) = 0;
 };
 
@@ -88,14 +109,11 @@ class SocketCanLink final : public CanLink {
   SocketCanLink(const SocketCanLink&) = delete;
   SocketCanLink& operator=(const SocketCanLink&) = delete;
 
-  // Also receive the frames this socket sends (off by default, as on the kernel).
-  bool ReceiveOwn(bool on, std::string* why);
-
  private:
   SocketCanLink(int fd, std::string interface)
       : fd_(fd), interface_(std::move(interface)) {}
   bool DoSend(const protocol::CanFrame& frame, std::string* why) override;
-  std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string* why) override;
+  ReceiveResult DoReceive(int timeout_ms, std::string* why) override;
   bool DoSetFilters(std::span<const IdFilter> filters, std::string* why) override;
 
   int fd_;
