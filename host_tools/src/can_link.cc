@@ -16,6 +16,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <thread>
 
 namespace mjc::host {
 namespace {
@@ -77,6 +78,16 @@ std::unique_ptr<SocketCanLink> SocketCanLink::Open(const std::string& interface,
     ::close(fd);
     return nullptr;
   }
+  // The smallest send buffer the kernel allows (it rounds 0 up to a few frames): a
+  // socket that has that much queued gets EAGAIN and poll() reports POLLOUT when the
+  // driver frees room, before the interface's own queue (txqueuelen, 10 on CAN) can
+  // fill and drop frames with ENOBUFS, which poll() cannot wait for (see DoSend).
+  const int send_buffer = 0;
+  if (::setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &send_buffer, sizeof send_buffer) < 0) {
+    Say(why, Errno("cannot set the send buffer on '" + interface + "'"));
+    ::close(fd);
+    return nullptr;
+  }
   // Eight boards at full rate are ~9,000 frames/s: 4 MB holds seconds of them while
   // the tool is busy (the kernel default, ~200 KB, holds about 0.2 s). Without
   // CAP_NET_ADMIN SO_RCVBUFFORCE fails and SO_RCVBUF is capped at rmem_max; either way
@@ -106,28 +117,40 @@ bool SocketCanLink::DoSend(const protocol::CanFrame& frame, std::string* why) {
               std::min<std::size_t>(frame.length, CANFD_MAX_DLEN));
   const std::size_t size = frame.fd ? CANFD_MTU : CAN_MTU;
   if (frame.fd) raw.flags = CANFD_BRS;
-  // A full transmit queue (ENOBUFS on CAN: the qdisc is full; EAGAIN on a
-  // non-blocking socket) drains in frame times: wait for room, a bounded number of
-  // times, rather than dropping.
-  constexpr int kAttempts = 50;
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+  // A full transmit queue drains in frame times: wait for room, up to kPatience, rather
+  // than dropping the frame or spinning. Two queues can be full. This socket's send
+  // buffer (EAGAIN) is what poll() watches: POLLOUT returns once the driver has sent
+  // frames and freed them, and Open keeps that buffer small so it fills first. The
+  // interface's queue (ENOBUFS: the frame was dropped on the way in, so the buffer
+  // stays free and POLLOUT is already set) also fills when other sockets keep it busy;
+  // then the wait is a pause of about one frame time (an 8-byte classical frame at
+  // 1 Mbit/s takes 135 µs with worst-case stuffing).
+  constexpr auto kPatience = std::chrono::milliseconds(100);
+  constexpr auto kFrameTime = std::chrono::microseconds(135);
+  const auto deadline = std::chrono::steady_clock::now() + kPatience;
+  for (;;) {
     const ssize_t n = ::write(fd_, &raw, size);
     if (n == static_cast<ssize_t>(size)) {
       ++stats_.sent;
       return true;
     }
-    if (n < 0 && (errno == ENOBUFS || errno == EAGAIN)) {
-      ++stats_.tx_retries;
-      bool error = false;
-      WaitFor(fd_, POLLOUT, 2, &error);  // ENOBUFS does not raise POLLOUT: also a pause
-      continue;
+    if (n >= 0 || (errno != ENOBUFS && errno != EAGAIN)) break;
+    const bool queue_full = errno == ENOBUFS;
+    const auto left = std::chrono::ceil<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      ++stats_.tx_failed;
+      Say(why, "'" + interface_ + "': transmit queue stayed full (" +
+                   (queue_full ? "ENOBUFS" : "EAGAIN") + ") for 100 ms");
+      return false;
     }
-    ++stats_.tx_failed;
-    Say(why, Errno("cannot send on '" + interface_ + "'"));
-    return false;
+    ++stats_.tx_retries;
+    bool error = false;
+    if (!WaitFor(fd_, POLLOUT, static_cast<int>(left.count()), &error) && error) break;
+    if (queue_full) std::this_thread::sleep_for(kFrameTime);
   }
   ++stats_.tx_failed;
-  Say(why, "'" + interface_ + "': transmit queue stayed full (ENOBUFS) for 100 ms");
+  Say(why, Errno("cannot send on '" + interface_ + "'"));
   return false;
 }
 

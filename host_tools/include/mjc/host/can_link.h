@@ -54,7 +54,7 @@ struct LinkStats {
   std::uint64_t received = 0;
   std::uint64_t error_frames = 0;  // CAN error frames seen (controller, bus errors)
   std::uint64_t bus_off = 0;       // of those, bus-off reports
-  std::uint64_t tx_retries = 0;    // sends retried after ENOBUFS / EAGAIN
+  std::uint64_t tx_retries = 0;    // waits for room after ENOBUFS / EAGAIN
   std::uint64_t tx_failed = 0;     // sends given up on
   std::uint64_t rx_dropped = 0;    // frames the kernel dropped for this socket
                                    // (receive buffer full; SO_RXQ_OVFL)
@@ -69,7 +69,7 @@ class CanLink {
  public:
   virtual ~CanLink() = default;
 
-  // Queues one frame for transmission. Waits (bounded) when the interface's queue is
+  // Queues one frame for transmission. Waits up to 100 ms when the interface's queue is
   // full; false with the reason when it stays full or the interface is down.
   bool Send(const protocol::CanFrame& frame, std::string* why) {
     return DoSend(frame, why);
