@@ -73,7 +73,13 @@ void AddMonitor(CLI::App& app, int* status) {
       const auto until =
           std::chrono::steady_clock::now() + std::chrono::milliseconds(interval_ms);
       while (std::chrono::steady_clock::now() < until) {
-        for (auto& b : boards) b->Poll(5);
+        for (auto& b : boards) {
+          if (!b->Poll(5, &why)) {
+            std::fprintf(stderr, "mjc monitor: %s\n", why.c_str());
+            *status = 1;
+            return;
+          }
+        }
       }
       const auto now = std::chrono::steady_clock::now();
       for (std::size_t i = 0; i < boards.size(); ++i) {

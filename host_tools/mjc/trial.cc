@@ -86,6 +86,7 @@ void AddTrial(CLI::App& app, int* status) {
       config.repetitions = static_cast<std::uint8_t>(reps);
       config.rest_100ms = static_cast<std::uint8_t>(std::lround(rest_s * 10));
       const double timeout = (2 * rest_s + reps / frequency_hz) * 3 + 10;
+      const std::uint64_t broken_before = board.incomplete_windows();
       const auto trial = host::RunBoardTrial(
           board, config,
           [&](const host::BoardWindow& w) {
@@ -99,6 +100,17 @@ void AddTrial(CLI::App& app, int* status) {
         std::fprintf(stderr, "mjc trial: node %d: %s\n", node, trial.error.c_str());
         *status = 3;
         return;
+      }
+      // A flexion and an extension window a repetition: fewer means some were lost on
+      // the bus (the tables then use those that arrived).
+      const auto expected = 2 * static_cast<std::size_t>(reps);
+      if (trial.windows.size() != expected) {
+        std::fprintf(
+            stderr,
+            "mjc trial: trial %zu: %zu of %zu windows arrived (%llu lost a part "
+            "on the bus)\n",
+            t + 1, trial.windows.size(), expected,
+            static_cast<unsigned long long>(board.incomplete_windows() - broken_before));
       }
       runs.push_back({plan[t], trial.windows});
     }

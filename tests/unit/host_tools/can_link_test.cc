@@ -1,13 +1,18 @@
 // The host's CAN links without a CAN kernel: the in-process bus (delivery to the other
 // links in order, filters, timeouts) and SocketCAN's refusal with a reason where the
-// kernel or the interface is missing. The real SocketCAN and ISO-TP paths run against
-// Debian's kernel in tests/kernel.
+// kernel or the interface is missing; and the board client on such a link, which
+// reassembles window summaries from their five frames. The real SocketCAN and ISO-TP
+// paths run against Debian's kernel in tests/kernel.
 #include "mjc/host/can_link.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <initializer_list>
 
+#include "mjc/host/board_client.h"
 #include "mjc/protocol/codec.h"
 
 namespace {
@@ -88,6 +93,125 @@ TEST(SocketCanLink, RefusesWithAReasonWhenThereIsNoCan) {
   auto isotp = IsoTpLink::Open("", 0x3E1, 0x3F1, &why);
   EXPECT_EQ(isotp, nullptr);
   EXPECT_NE(why.find("interface name"), std::string::npos) << why;
+}
+
+// ---------------------------------------------------------------------------------
+// Window summaries through BoardClient: five frames a window, header first.
+
+constexpr std::uint8_t kNode = 1;
+
+// Window `repetition`'s five frames as the board sends them; every value is derived
+// from the repetition, so a window mixed from two would show.
+std::array<protocol::CanFrame, 5> WindowFrames(std::uint16_t repetition) {
+  protocol::WindowHeader h;
+  h.motion = Motion::kFlexion;
+  h.repetition = repetition;
+  h.eta_valid = true;
+  h.eta_percent = Ratio::Quantize(40.0 + repetition);
+  protocol::WindowEnergy e;
+  e.loading = protocol::WireEnergy::Quantize(0.001 * repetition);
+  e.unloading = protocol::WireEnergy::Quantize(-0.0005 * repetition);
+  protocol::WindowWork w;
+  w.positive = protocol::WireEnergy::Quantize(0.002 * repetition);
+  w.negative = protocol::WireEnergy::Quantize(-0.001 * repetition);
+  protocol::WindowPeaks p;
+  p.peak_power = Power::Quantize(0.001 * repetition);
+  p.peak_torque = Torque::Quantize(0.01 * repetition);
+  protocol::WindowTicks t;
+  t.start_tick = 1000u * repetition;
+  t.peak_offset = 100;
+  t.end_offset = 200;
+  return {protocol::Encode(h, kNode), protocol::Encode(e, kNode),
+          protocol::Encode(w, kNode), protocol::Encode(p, kNode),
+          protocol::Encode(t, kNode)};
+}
+
+class WindowAssembly : public ::testing::Test {
+ protected:
+  // Sends window `repetition` without the parts listed in `lost` (0 header … 4 ticks).
+  void SendWindow(std::uint16_t repetition, std::initializer_list<int> lost = {}) {
+    const auto frames = WindowFrames(repetition);
+    for (int part = 0; part < 5; ++part) {
+      if (std::find(lost.begin(), lost.end(), part) != lost.end()) continue;
+      ASSERT_TRUE(board_->Send(frames[static_cast<std::size_t>(part)], &why_));
+    }
+  }
+  std::vector<BoardWindow> Received() {
+    EXPECT_TRUE(client_.Poll(50, &why_)) << why_;
+    return client_.TakeWindows();
+  }
+
+  std::shared_ptr<InProcessBus> bus_ = InProcessBus::Create();
+  std::unique_ptr<CanLink> board_ = bus_->Connect();
+  std::unique_ptr<CanLink> host_ = bus_->Connect();
+  BoardClient client_{host_.get(), kNode};
+  std::string why_;
+};
+
+TEST_F(WindowAssembly, CompleteWindowsArriveWhole) {
+  SendWindow(1);
+  SendWindow(2);
+  const auto windows = Received();
+  ASSERT_EQ(windows.size(), 2u);
+  const BoardWindow& w = windows[1];
+  EXPECT_EQ(w.repetition, 2);
+  EXPECT_TRUE(w.eta_valid);
+  EXPECT_NEAR(w.eta_percent, 42.0, 1e-6);
+  EXPECT_NEAR(w.loading_J, 0.002, 1e-7);
+  EXPECT_NEAR(w.unloading_J, -0.001, 1e-7);
+  EXPECT_NEAR(w.positive_J, 0.004, 1e-7);
+  EXPECT_NEAR(w.negative_J, -0.002, 1e-7);
+  EXPECT_NEAR(w.peak_power_W, 0.002, 1e-6);
+  EXPECT_NEAR(w.peak_torque_Nm, 0.02, 1e-6);
+  EXPECT_EQ(w.start_tick, 2000u);
+  EXPECT_EQ(w.peak_tick, 2100u);
+  EXPECT_EQ(w.end_tick, 2200u);
+  EXPECT_EQ(client_.incomplete_windows(), 0u);
+}
+
+TEST_F(WindowAssembly, LostHeaderDropsTheWindowAndCountsIt) {
+  SendWindow(1);
+  SendWindow(2, {0});
+  SendWindow(3);
+  const auto windows = Received();
+  ASSERT_EQ(windows.size(), 2u);
+  EXPECT_EQ(windows[0].repetition, 1);
+  EXPECT_EQ(windows[1].repetition, 3);
+  EXPECT_NEAR(windows[0].loading_J, 0.001, 1e-7);  // not window 2's
+  EXPECT_EQ(windows[1].start_tick, 3000u);
+  EXPECT_EQ(client_.incomplete_windows(), 1u);
+}
+
+TEST_F(WindowAssembly, LostMiddleOrLastPartDropsTheWindow) {
+  SendWindow(1, {2});  // no WindowWork
+  SendWindow(2, {4});  // no WindowTicks: the next header ends it
+  SendWindow(3);
+  const auto windows = Received();
+  ASSERT_EQ(windows.size(), 1u);
+  EXPECT_EQ(windows[0].repetition, 3);
+  EXPECT_NEAR(windows[0].positive_J, 0.006, 1e-7);
+  EXPECT_EQ(client_.incomplete_windows(), 2u);
+}
+
+TEST_F(WindowAssembly, LostTicksAndNextHeaderDoNotMergeTwoWindows) {
+  // Window 1's ticks and window 2's header lost: window 2's body would complete
+  // window 1 if parts were only collected, not ordered.
+  SendWindow(1, {4});
+  SendWindow(2, {0});
+  SendWindow(3);
+  const auto windows = Received();
+  ASSERT_EQ(windows.size(), 1u);
+  EXPECT_EQ(windows[0].repetition, 3);
+  EXPECT_EQ(client_.incomplete_windows(), 2u);
+}
+
+TEST_F(WindowAssembly, MalformedPartCountsAsLost) {
+  auto frames = WindowFrames(1);
+  frames[1].length = 7;  // WindowEnergy is 8 bytes
+  for (const auto& f : frames) ASSERT_TRUE(board_->Send(f, &why_));
+  EXPECT_TRUE(Received().empty());
+  EXPECT_EQ(client_.malformed(), 1u);
+  EXPECT_EQ(client_.incomplete_windows(), 1u);
 }
 
 }  // namespace
