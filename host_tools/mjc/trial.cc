@@ -112,13 +112,11 @@ void AddTrial(CLI::App& app, int* status) {
             t + 1, trial.windows.size(), expected,
             static_cast<unsigned long long>(board.incomplete_windows() - broken_before));
       }
-      runs.push_back({plan[t], trial.windows});
+      runs.push_back({plan[t], static_cast<std::uint16_t>(reps), trial.windows});
     }
     host::WriteWindowsCsv(runs, out_dir);
-    std::fputs(
-        host::TrialTables(runs, static_cast<std::uint16_t>(reps), repeatability).c_str(),
-        stdout);
-    if (!host::PlotTrials(out_dir, &why))
+    std::fputs(host::TrialTables(runs, repeatability).c_str(), stdout);
+    if (!host::PlotTrials(out_dir, repeatability, &why))
       std::fprintf(stderr, "mjc trial: %s\n", why.c_str());
     std::printf("windows: %s/windows.csv, figure: %s/eta.png\n", out_dir.c_str(),
                 out_dir.c_str());
