@@ -2,22 +2,20 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <type_traits>
 
 #include "mjc/host/board_client.h"
 #include "mjc/host/can_link.h"
+#include "mjc/host/units.h"
 #include "mjc/protocol/can_frame.h"
 #include "mjc/protocol/messages.h"
 
 namespace mjc::host {
-namespace {
-
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
-
-}  // namespace
 
 nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& r) {
-  return {{"c_right_deg", r.backlash.c_right.ToDouble() / kDeg},
-          {"c_left_deg", r.backlash.c_left.ToDouble() / kDeg},
+  return {{"c_right_deg", RadToDeg(r.backlash.c_right.ToDouble())},
+          {"c_left_deg", RadToDeg(r.backlash.c_left.ToDouble())},
           {"alpha", r.backlash.alpha.ToDouble()},
           {"sea_stiffness_Nm_per_rad", r.sea_stiffness.ToDouble()},
           {"joint_zero_count", r.joint_zero_count},
@@ -41,24 +39,38 @@ std::optional<protocol::CalibrationRecord> CalibrationFromJson(const nlohmann::j
     }
     return true;
   };
-  double c_right = 0, c_left = 0, alpha = 0, stiffness = 0, zero = 0;
+  // An integer field in 0..max, as the record's unsigned wire fields hold them; absent
+  // is 0 unless required.
+  auto integer = [&](const char* key, std::uint64_t max, bool required, auto* out) {
+    *out = 0;
+    if (!j.contains(key) && !required) return true;
+    const bool in_range =
+        j.contains(key) && j[key].is_number_integer() &&
+        (j[key].is_number_unsigned() || j[key].get<std::int64_t>() >= 0) &&
+        j[key].get<std::uint64_t>() <= max;
+    if (!in_range) {
+      *why = std::string("calibration: field '") + key + "' must be an integer in 0.." +
+             std::to_string(max);
+      return false;
+    }
+    *out = static_cast<std::remove_pointer_t<decltype(out)>>(j[key].get<std::uint64_t>());
+    return true;
+  };
+  using U32 = std::numeric_limits<std::uint32_t>;
+  double c_right = 0, c_left = 0, alpha = 0, stiffness = 0;
   if (!number("c_right_deg", &c_right) || !number("c_left_deg", &c_left) ||
       !number("alpha", &alpha) || !number("sea_stiffness_Nm_per_rad", &stiffness) ||
-      !number("joint_zero_count", &zero)) {
+      !integer("joint_zero_count", 16383, true, &r.joint_zero_count) ||
+      !integer("fit_rms_urad", U32::max(), false, &r.fit_rms_urad) ||
+      !integer("fit_lag_us", U32::max(), false, &r.fit_lag_us) ||
+      !integer("fitted_at_unix_s", std::numeric_limits<std::uint64_t>::max(), false,
+               &r.fitted_at_unix_s)) {
     return std::nullopt;
   }
-  r.backlash.c_right = Angle::Quantize(c_right * kDeg);
-  r.backlash.c_left = Angle::Quantize(c_left * kDeg);
+  r.backlash.c_right = Angle::Quantize(DegToRad(c_right));
+  r.backlash.c_left = Angle::Quantize(DegToRad(c_left));
   r.backlash.alpha = Scale::Quantize(alpha);
   r.sea_stiffness = Stiffness::Quantize(stiffness);
-  if (zero < 0 || zero > 16383 || zero != std::floor(zero)) {
-    *why = "calibration: joint_zero_count must be an integer in 0..16383";
-    return std::nullopt;
-  }
-  r.joint_zero_count = static_cast<std::uint16_t>(zero);
-  r.fit_rms_urad = j.value("fit_rms_urad", 0u);
-  r.fit_lag_us = j.value("fit_lag_us", 0u);
-  r.fitted_at_unix_s = j.value("fitted_at_unix_s", std::uint64_t{0});
   // The board's checks, run here first, so a bad file never reaches the bus.
   const auto bytes = protocol::EncodeCalibration(r);
   protocol::CalibrationRecord checked;

@@ -14,7 +14,10 @@ namespace mjc::host {
 nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& record);
 
 // Reads and range-checks a calibration (the board's own checks, run here first): nullopt
-// with the reason naming the field when it is missing or out of range.
+// with the reason naming the field when it is missing, of the wrong type or out of
+// range. The fit fields (fit_rms_urad, fit_lag_us, fitted_at_unix_s) are optional
+// (absent: 0) but, when present, must be integers within their wire type's range.
+// Never throws.
 std::optional<protocol::CalibrationRecord> CalibrationFromJson(const nlohmann::json& json,
                                                                std::string* why);
 
