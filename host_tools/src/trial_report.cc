@@ -168,17 +168,16 @@ std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::p
 bool PlotTrials(const std::filesystem::path& dir, bool repeatability, std::string* why) {
   // Columns: 1 trial, 2 amplitude_deg, 3 motion, 5 eta_valid, 6 eta_pct.
   const auto script = dir / "eta.gp";
-  std::ofstream(script) << std::string(
-                               "set terminal pngcairo size 900,600\n"
-                               "set output 'eta.png'\n"
-                               "set datafile separator ','\nset grid\n") +
-                               (repeatability ? "set xlabel 'trial'\n"
-                                              : "set xlabel 'amplitude (°)'\n") +
-                               "set ylabel 'energy loss η (%)'\n"
-                               "plot 'windows.csv' every ::1 using " +
-                               (repeatability ? "1" : "2") +
-                               ":(strcol(3) eq 'flexion' && $5 == 1 ? $6 : 1/0) "
-                               "with points pt 7 title 'flexion windows'\n";
+  WriteFile(script, std::string("set terminal pngcairo size 900,600\n"
+                                "set output 'eta.png'\n"
+                                "set datafile separator ','\nset grid\n") +
+                        (repeatability ? "set xlabel 'trial'\n"
+                                       : "set xlabel 'amplitude (°)'\n") +
+                        "set ylabel 'energy loss η (%)'\n"
+                        "plot 'windows.csv' every ::1 using " +
+                        (repeatability ? "1" : "2") +
+                        ":(strcol(3) eq 'flexion' && $5 == 1 ? $6 : 1/0) "
+                        "with points pt 7 title 'flexion windows'\n");
   return RunGnuplot(script, why);
 }
 

@@ -315,4 +315,17 @@ TEST_F(WindowsCsv, AnUnknownMotionIsMalformed) {
   EXPECT_NE(why.find("line 2 is malformed"), std::string::npos) << why;
 }
 
+TEST_F(WindowsCsv, AnUnwritableFolderThrowsNamingTheFile) {
+  const auto missing = dir_ / "no" / "such" / "folder";
+  try {
+    WriteWindowsCsv({}, missing);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find((missing / "windows.csv").string()),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("No such file"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace

@@ -26,7 +26,8 @@ std::string TrialTables(const std::vector<TrialWindows>& trials, bool repeatabil
 // run of one amplitude).
 bool SameAmplitude(const std::vector<TrialWindows>& trials);
 
-// Writes windows.csv (every window) into `dir`.
+// Writes windows.csv (every window) into `dir`; throws std::runtime_error naming the
+// file when it cannot be written.
 void WriteWindowsCsv(const std::vector<TrialWindows>& trials,
                      const std::filesystem::path& dir);
 
@@ -36,7 +37,8 @@ std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::p
                                                         std::string* why);
 
 // eta.png in `dir` (gnuplot): η of every valid flexion window against the trial number
-// (repeatability) or the amplitude. False with the reason when gnuplot fails.
+// (repeatability) or the amplitude. False with the reason when gnuplot fails; throws
+// std::runtime_error when its script cannot be written.
 bool PlotTrials(const std::filesystem::path& dir, bool repeatability, std::string* why);
 
 }  // namespace mjc::host
