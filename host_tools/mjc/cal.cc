@@ -47,10 +47,21 @@ void AddCal(CLI::App& app) {
   AddNodeOption(download, &node);
   download->add_option("--out", out, "Write it to this file (default: print)");
   download->callback([] {
+    auto link = OpenLink(iface);
+    host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
     std::string why;
-    const auto record = host::DownloadCalibration(iface, node, &why);
-    if (!record) throw Failure(Exit::kNoAnswer, why);
-    const std::string text = host::CalibrationToJson(*record).dump(2) + "\n";
+    const auto held = host::ReadCalibration(board, &why);
+    if (!held) throw Failure(NoAnswer(board), why);
+    if (!held->calibrated) {
+      throw Failure(Exit::kRefused,
+                    "node " + std::to_string(node) + " is not calibrated");
+    }
+    // The fit's RMS, lag and time are not readable over the bus: leave them out rather
+    // than print zeros as if they were measured.
+    nlohmann::json j = host::CalibrationToJson(held->record);
+    for (const char* key : {"fit_rms_urad", "fit_lag_us", "fitted_at_unix_s"})
+      j.erase(key);
+    const std::string text = j.dump(2) + "\n";
     if (out.empty()) {
       std::fputs(text.c_str(), stdout);
     } else {
@@ -71,16 +82,22 @@ void AddCal(CLI::App& app) {
     std::string why;
     const auto outcome = host::UploadCalibration(iface, node, record, timeout_ms, &why);
     const std::string who = "node " + std::to_string(node) + " on " + iface;
-    if (!outcome) throw Failure(why);
-    if (!outcome->answered)
-      throw Failure(Exit::kNoAnswer, who + " did not answer (" + why + ")");
-    if (outcome->result != protocol::CalibrationResult::kAccepted) {
-      throw Failure(Exit::kRefused, who + " refused it: " +
-                                        host::DescribeCalibrationResult(outcome->result,
-                                                                        outcome->detail));
+    switch (outcome.status) {
+      case host::UploadStatus::kLinkFailed:
+        throw Failure("cannot send to " + who + ": " + why);
+      case host::UploadStatus::kNoAnswer:
+        throw Failure(Exit::kNoAnswer, who + " did not answer (" + why + ")");
+      case host::UploadStatus::kMalformedReply:
+        throw Failure(Exit::kNoAnswer, "malformed answer: " + why);
+      case host::UploadStatus::kAnswered:
+        break;
     }
-    std::printf("node %d accepted the calibration (%.1f ms)\n", node,
-                outcome->elapsed_ms);
+    if (outcome.result != protocol::CalibrationResult::kAccepted) {
+      throw Failure(Exit::kRefused,
+                    who + " refused it: " +
+                        host::DescribeCalibrationResult(outcome.result, outcome.detail));
+    }
+    std::printf("node %d accepted the calibration (%.1f ms)\n", node, outcome.elapsed_ms);
   });
 }
 

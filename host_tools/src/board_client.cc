@@ -67,6 +67,12 @@ std::vector<BoardWindow> BoardClient::TakeWindows() {
   return out;
 }
 
+std::vector<AngleSample> BoardClient::TakeAngles() {
+  std::vector<AngleSample> out;
+  out.swap(angles_);
+  return out;
+}
+
 // A window is kept only when its five parts arrive complete and in order (the board
 // sends them back to back, header first, with ascending ids, so the bus keeps the
 // order): a lost or refused part drops the window rather than mixing two windows.
@@ -128,6 +134,7 @@ void BoardClient::Handle(const CanFrame& f) {
       if (ok(Decode(f, &a))) {
         status_.motor_rad = a.motor.ToDouble();
         status_.joint_rad = a.joint.ToDouble();
+        if (keep_angles_) angles_.push_back({status_.motor_rad, status_.joint_rad});
       }
       return;
     }

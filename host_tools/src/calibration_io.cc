@@ -3,9 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <type_traits>
 
-#include "mjc/host/board_client.h"
 #include "mjc/host/can_link.h"
 #include "mjc/host/units.h"
 #include "mjc/protocol/can_frame.h"
@@ -124,57 +122,64 @@ std::string DescribeCalibrationResult(protocol::CalibrationResult result,
   return "unknown result " + std::to_string(static_cast<int>(result));
 }
 
-std::optional<UploadOutcome> UploadCalibration(const std::string& iface, int node,
-                                               const protocol::CalibrationRecord& record,
-                                               int timeout_ms, std::string* why) {
+UploadOutcome UploadCalibration(const std::string& iface, int node,
+                                const protocol::CalibrationRecord& record, int timeout_ms,
+                                std::string* why) {
   using protocol::Function;
   const auto n = static_cast<std::uint8_t>(node);
+  UploadOutcome out;
   auto link = IsoTpLink::Open(
       iface, protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpToBoard), n),
       protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), n), why);
-  if (!link) return std::nullopt;
-  UploadOutcome out;
   const auto t0 = std::chrono::steady_clock::now();
-  const auto bytes = protocol::EncodeCalibration(record);
-  if (!link->Send(bytes, why))
-    return out;  // not answered: the send failed (no flow control)
+  if (!link || !link->Send(protocol::EncodeCalibration(record), why)) {
+    out.status = UploadStatus::kLinkFailed;
+    return out;
+  }
   const auto reply = link->Receive(timeout_ms, why);
   out.elapsed_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
           .count();
-  if (!reply || reply->size() != 2) return out;
-  out.answered = true;
+  if (!reply) {
+    out.status = UploadStatus::kNoAnswer;
+    return out;
+  }
+  if (reply->size() != 2) {
+    out.status = UploadStatus::kMalformedReply;
+    *why = "node " + std::to_string(node) + " answered with " +
+           std::to_string(reply->size()) + " bytes, not [result, detail]";
+    return out;
+  }
+  out.status = UploadStatus::kAnswered;
   out.result = static_cast<protocol::CalibrationResult>((*reply)[0]);
   out.detail = (*reply)[1];
   return out;
 }
 
-std::optional<protocol::CalibrationRecord> DownloadCalibration(const std::string& iface,
-                                                               int node,
-                                                               std::string* why) {
+std::optional<BoardCalibration> ReadCalibration(BoardClient& board, std::string* why) {
   using protocol::ParamId;
-  auto link = SocketCanLink::Open(iface, why);
-  if (!link) return std::nullopt;
-  BoardClient board(link.get(), static_cast<std::uint8_t>(node));
-  const auto calibrated = board.ReadParam(ParamId::kCalibrated, 500, why);
-  if (!calibrated) return std::nullopt;
-  if (*calibrated != 1) {
-    *why = "node " + std::to_string(node) + " is not calibrated";
+  std::int32_t value[6] = {};
+  const ParamId ids[6] = {ParamId::kCalibrated,           ParamId::kCalibrationRight,
+                          ParamId::kCalibrationLeft,      ParamId::kCalibrationAlpha,
+                          ParamId::kCalibrationStiffness, ParamId::kCalibrationJointZero};
+  for (int i = 0; i < 6; ++i) {
+    const auto v = board.ReadParam(ids[i], 500, why);
+    if (!v) return std::nullopt;
+    value[i] = *v;
+  }
+  if (value[5] < 0 || value[5] > 16383) {
+    *why = "node " + std::to_string(board.node()) + " reports joint zero count " +
+           std::to_string(value[5]) + ", outside 0..16383";
     return std::nullopt;
   }
-  protocol::CalibrationRecord r;
-  const auto right = board.ReadParam(ParamId::kCalibrationRight, 500, why);
-  const auto left = board.ReadParam(ParamId::kCalibrationLeft, 500, why);
-  const auto alpha = board.ReadParam(ParamId::kCalibrationAlpha, 500, why);
-  const auto stiffness = board.ReadParam(ParamId::kCalibrationStiffness, 500, why);
-  const auto zero = board.ReadParam(ParamId::kCalibrationJointZero, 500, why);
-  if (!right || !left || !alpha || !stiffness || !zero) return std::nullopt;
-  r.backlash.c_right = Angle::FromRaw(*right);
-  r.backlash.c_left = Angle::FromRaw(*left);
-  r.backlash.alpha = Scale::FromRaw(*alpha);
-  r.sea_stiffness = Stiffness::FromRaw(*stiffness);
-  r.joint_zero_count = static_cast<std::uint16_t>(*zero);
-  return r;
+  BoardCalibration out;
+  out.calibrated = value[0] == 1;
+  out.record.backlash.c_right = Angle::FromRaw(value[1]);
+  out.record.backlash.c_left = Angle::FromRaw(value[2]);
+  out.record.backlash.alpha = Scale::FromRaw(value[3]);
+  out.record.sea_stiffness = Stiffness::FromRaw(value[4]);
+  out.record.joint_zero_count = static_cast<std::uint16_t>(value[5]);
+  return out;
 }
 
 }  // namespace mjc::host

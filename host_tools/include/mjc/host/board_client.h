@@ -2,7 +2,8 @@
 
 // One joint board seen from the host over a CanLink: commands with their answers,
 // trial configuration, and what the board reports (heartbeat, telemetry, window
-// summaries reassembled from their five frames, faults). Used by mjc trial and monitor.
+// summaries reassembled from their five frames, faults). Used by mjc trial, calibrate,
+// cal and monitor.
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -33,6 +34,12 @@ struct BoardStatus {
   Fault fault = Fault::kNone;
   std::uint32_t tick = 0;
   double motor_rad = 0, joint_rad = 0, torque_Nm = 0, power_W = 0, energy_J = 0;
+};
+
+// One TelemetryAngles frame: θ_m and θ_j in rad.
+struct AngleSample {
+  double motor_rad = 0;
+  double joint_rad = 0;
 };
 
 class BoardClient {
@@ -66,6 +73,12 @@ class BoardClient {
   // Windows completed since the last call.
   std::vector<BoardWindow> TakeWindows();
 
+  // Keeps every TelemetryAngles sample from now on (off by default, so a long-running
+  // client does not grow), until KeepAngles(false).
+  void KeepAngles(bool on) { keep_angles_ = on; }
+  // The samples kept since the last call, in arrival order.
+  std::vector<AngleSample> TakeAngles();
+
   std::uint8_t node() const { return node_; }
   // True once a send or receive failed on this side (the link is unusable): what tells
   // a failed Command or ReadParam from a board that did not answer.
@@ -92,6 +105,8 @@ class BoardClient {
   int last_part_ = -1;
   bool broken_ = false;
   std::vector<BoardWindow> windows_;
+  bool keep_angles_ = false;
+  std::vector<AngleSample> angles_;
   std::optional<protocol::CommandResult> last_result_;
   std::optional<protocol::ParamValue> last_param_;
   std::uint64_t malformed_ = 0;
