@@ -1,39 +1,59 @@
 // mjc calibrate: the paper's calibration on a board over the bus — start the
 // increasing-amplitude sweep on the robot alone, record the board's own θ_m and θ_j
-// (the 1 kHz angle telemetry), fit c_r, c_l and the joint lag with NLopt, upload the
-// record over ISO-TP, and keep a copy in a JSON file.
+// (its angle telemetry), fit c_r, c_l and the joint lag with NLopt, save the record in
+// a JSON file and upload it over ISO-TP. The upload replaces only the backlash: the SEA
+// stiffness and joint zero count are the ones the board already holds.
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
-#include <fstream>
+#include <filesystem>
 
 #include "commands.h"
+#include "mjc/host/board_client.h"
 #include "mjc/host/calibration_fit.h"
 #include "mjc/host/calibration_io.h"
-#include "mjc/host/can_link.h"
-#include "mjc/protocol/codec.h"
+#include "mjc/host/report.h"
+#include "mjc/host/units.h"
 
 namespace mjc::cli {
 namespace {
 
 using namespace mjc::protocol;
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+// Fails now, not after a minute of sweeping, when `path` cannot be written.
+void CheckWritable(const std::filesystem::path& path) {
+  const std::filesystem::path probe =
+      std::filesystem::exists(path)
+          ? path
+          : (path.has_parent_path() ? path.parent_path() : std::filesystem::path("."));
+  if (::access(probe.c_str(), W_OK) != 0) {
+    throw Failure("cannot write " + path.string() + ": " + std::strerror(errno));
+  }
+}
+
+bool SameCalibration(const CalibrationRecord& a, const CalibrationRecord& b) {
+  return a.backlash.c_right == b.backlash.c_right &&
+         a.backlash.c_left == b.backlash.c_left && a.backlash.alpha == b.backlash.alpha &&
+         a.sea_stiffness == b.sea_stiffness && a.joint_zero_count == b.joint_zero_count;
+}
 
 }  // namespace
 
-void AddCalibrate(CLI::App& app, int* status) {
+void AddCalibrate(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "calibrate",
-      "Sweep, fit the backlash, upload and save the calibration of one board");
-  static std::string iface = "vcan0", out_path = "calibration.json";
+      "Sweep, fit the backlash, save and upload the calibration of one board");
+  static std::string iface, out_path = "calibration.json";
   static int node = 1, cycles = 10;
   static double amplitude_deg = 30, frequency_hz = 0.5;
   static bool upload = true;
-  cmd->add_option("--iface", iface, "CAN interface")->capture_default_str();
-  cmd->add_option("--node", node, "Node id")
-      ->check(CLI::Range(1, 8))
-      ->capture_default_str();
+  AddIfaceOption(cmd, &iface);
+  AddNodeOption(cmd, &node);
   cmd->add_option("--amplitude-deg", amplitude_deg, "Final sweep amplitude")
       ->check(CLI::Range(1.0, 90.0))
       ->capture_default_str();
@@ -46,143 +66,132 @@ void AddCalibrate(CLI::App& app, int* status) {
   cmd->add_option("--out", out_path, "Where to save the calibration")
       ->capture_default_str();
   cmd->add_flag("!--no-upload", upload, "Fit and save only");
-  cmd->callback([status] {
+  cmd->callback([] {
+    CheckWritable(out_path);
+    auto link = OpenLink(iface);
+    host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
+    const std::string who = "node " + std::to_string(node);
     std::string why;
-    auto link = host::SocketCanLink::Open(iface, &why);
-    if (!link) {
-      std::fprintf(stderr, "mjc calibrate: %s\n", why.c_str());
-      *status = 1;
-      return;
+
+    // What the board holds now: the new record keeps its stiffness and joint zero.
+    const auto held = host::ReadCalibration(board, &why);
+    if (!held) {
+      throw Failure(NoAnswer(board), "cannot read " + who +
+                                         "'s calibration in force, not sweeping: " + why);
     }
-    const auto n = static_cast<std::uint8_t>(node);
-    const host::IdFilter only_node{n, 0x00F};
-    link->SetFilters({&only_node, 1}, &why);
+    // The board sends an angle sample every tick_hz / rate ticks: exactly this rate
+    // when it divides the tick rate, as the default 1 kHz does.
+    const auto rate_hz = board.ReadParam(ParamId::kTelemetryAnglesHz, 500, &why);
+    if (!rate_hz) throw Failure(NoAnswer(board), why);
+    if (*rate_hz <= 0) {
+      throw Failure(who +
+                    "'s angle telemetry is off (TelemetryAnglesHz 0): nothing to fit");
+    }
 
     protocol::SweepConfig sweep;
-    sweep.end_amplitude = Angle::Quantize(amplitude_deg * kDeg);
+    sweep.end_amplitude = Angle::Quantize(host::DegToRad(amplitude_deg));
     sweep.frequency_mHz = static_cast<std::uint16_t>(std::lround(frequency_hz * 1000));
     sweep.repetitions = static_cast<std::uint8_t>(cycles);
     sweep.rest_100ms = 5;
-    link->Send(Encode(sweep, n), &why);
-    const std::uint8_t sequence = static_cast<std::uint8_t>(std::time(nullptr) & 0xFF);
-    if (!link->Send(Encode(Command{CommandCode::kStartSweep, sequence}, n), &why)) {
-      std::fprintf(stderr, "mjc calibrate: %s\n", why.c_str());
-      *status = 1;
-      return;
+    if (!board.Send(sweep, &why)) throw Failure(why);
+    const auto outcome = board.Command(CommandCode::kStartSweep, 1000, &why);
+    if (!outcome) throw Failure(NoAnswer(board), why);
+    if (*outcome != CommandOutcomeCode::kAccepted) {
+      throw Failure(Exit::kRefused, who + " refused the sweep (outcome " +
+                                        std::to_string(static_cast<int>(*outcome)) + ")");
     }
-    // The command's answer.
-    bool answered = false;
-    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-    while (!answered && std::chrono::steady_clock::now() < until) {
-      const auto r = link->Receive(50);
-      protocol::CommandResult result;
-      if (r && Decode(r->frame, &result) == DecodeError::kOk &&
-          result.sequence == sequence) {
-        answered = true;
-        if (result.outcome != CommandOutcomeCode::kAccepted) {
-          std::fprintf(stderr, "mjc calibrate: node %d refused the sweep (outcome %d)\n",
-                       node, static_cast<int>(result.outcome));
-          *status = 4;
-          return;
-        }
-      }
-    }
-    if (!answered) {
-      std::fprintf(stderr, "mjc calibrate: node %d on %s did not answer\n", node,
-                   iface.c_str());
-      *status = 3;
-      return;
-    }
+
     // Record the board's angles until it is idle again.
-    std::vector<double> motor, joint;
+    std::fprintf(stderr, "mjc calibrate: sweeping %.0f° over %d cycles at %.2f Hz...\n",
+                 amplitude_deg, cycles, frequency_hz);
+    const std::uint64_t dropped_before = link->stats().rx_dropped;
+    const std::uint64_t malformed_before = board.malformed();
+    board.TakeAngles();
+    board.KeepAngles(true);
     const double expected_s = cycles / frequency_hz + 1.0;
     const auto deadline = std::chrono::steady_clock::now() +
                           std::chrono::duration<double>(expected_s * 3 + 5);
-    bool done = false;
-    std::fprintf(stderr, "mjc calibrate: sweeping %.0f° over %d cycles at %.2f Hz...\n",
-                 amplitude_deg, cycles, frequency_hz);
+    bool sweeping_seen = false, done = false;
     while (!done && std::chrono::steady_clock::now() < deadline) {
-      const auto r = link->Receive(100);
-      if (!r) continue;
-      TelemetryAngles a;
-      Heartbeat hb;
-      if (Decode(r->frame, &a) == DecodeError::kOk) {
-        motor.push_back(a.motor.ToDouble());
-        joint.push_back(a.joint.ToDouble());
-      } else if (Decode(r->frame, &hb) == DecodeError::kOk && motor.size() > 100 &&
-                 hb.state != BoardState::kCalibrating) {
-        done = true;
-        if (hb.state == BoardState::kFault) {
-          std::fprintf(stderr,
-                       "mjc calibrate: node %d faulted during the sweep (fault %d)\n",
-                       node, static_cast<int>(hb.fault));
-          *status = 5;
-          return;
-        }
+      if (!board.Poll(100, &why)) throw Failure(why);
+      const BoardState state = board.status().state;
+      if (state == BoardState::kFault) {
+        throw Failure(Exit::kFaulted,
+                      who + " faulted during the sweep (fault " +
+                          std::to_string(static_cast<int>(board.status().fault)) + ")");
       }
+      if (state == BoardState::kCalibrating) sweeping_seen = true;
+      done = sweeping_seen && state == BoardState::kIdle;
     }
-    if (!done) {
-      std::fprintf(stderr, "mjc calibrate: the sweep did not finish in time\n");
-      *status = 3;
-      return;
+    board.KeepAngles(false);
+    if (!done) throw Failure(Exit::kNoAnswer, "the sweep did not finish in time");
+    // A lost sample shifts every later one in time: the lag fit would read it as lag.
+    const std::uint64_t dropped = link->stats().rx_dropped - dropped_before;
+    const std::uint64_t malformed = board.malformed() - malformed_before;
+    if (dropped + malformed > 0) {
+      throw Failure("the record has gaps (" + std::to_string(dropped) +
+                    " frames dropped by the kernel, " + std::to_string(malformed) +
+                    " malformed): not fitting it; rerun the sweep on a quieter bus");
+    }
+
+    std::vector<double> motor, joint;
+    for (const host::AngleSample& s : board.TakeAngles()) {
+      motor.push_back(s.motor_rad);
+      joint.push_back(s.joint_rad);
     }
     host::BacklashFitOptions options;
     options.fit_lag = true;
-    options.sample_rate_hz = 1000;  // the board's angle telemetry rate
+    options.sample_rate_hz = *rate_hz;
     const host::BacklashFit fit = host::FitBacklash(motor, joint, options);
     const auto config = host::ToFirmwareConfig(fit, &why);
-    if (!config) {
-      std::fprintf(stderr, "mjc calibrate: fit not usable: %s\n", why.c_str());
-      *status = 4;
-      return;
-    }
-    CalibrationRecord record;
+    if (!config) throw Failure("fit not usable: " + why);
+    CalibrationRecord record = held->record;
     record.backlash = *config;
-    record.fit_rms_urad = static_cast<std::uint32_t>(fit.rms_error_rad * 1e6);
-    record.fit_lag_us = static_cast<std::uint32_t>(fit.lag_s * 1e6);
+    record.fit_rms_urad =
+        static_cast<std::uint32_t>(std::lround(fit.rms_error_rad * 1e6));
+    record.fit_lag_us = static_cast<std::uint32_t>(std::lround(fit.lag_s * 1e6));
     record.fitted_at_unix_s = static_cast<std::uint64_t>(std::time(nullptr));
     std::printf(
-        "fit over %zu samples: c_r %.4f°, c_l %.4f°, lag %.2f ms, rms %.4f°, %.1f ms\n",
-        motor.size(), fit.c_right_rad / kDeg, fit.c_left_rad / kDeg, fit.lag_s * 1e3,
-        fit.rms_error_rad / kDeg, fit.elapsed_ms);
-    const auto persist = [&record] {
-      std::ofstream(out_path) << host::CalibrationToJson(record).dump(2) << '\n';
-    };
+        "fit over %zu samples at %d Hz: c_r %.4f°, c_l %.4f°, lag %.2f ms, rms %.4f°, "
+        "%.1f ms\n",
+        motor.size(), *rate_hz, host::RadToDeg(fit.c_right_rad),
+        host::RadToDeg(fit.c_left_rad), fit.lag_s * 1e3,
+        host::RadToDeg(fit.rms_error_rad), fit.elapsed_ms);
+    // Saved before the upload, so a failed upload loses nothing: `mjc cal upload`
+    // sends the file later.
+    host::WriteFile(out_path, host::CalibrationToJson(record).dump(2) + "\n");
     if (!upload) {
-      persist();
       std::printf("saved %s (not uploaded)\n", out_path.c_str());
-      *status = 0;
       return;
     }
-    const auto outcome = host::UploadCalibration(iface, node, record, 1000, &why);
-    if (!outcome || !outcome->answered) {
-      std::fprintf(stderr, "mjc calibrate: upload to node %d failed: %s\n", node,
-                   why.c_str());
-      *status = 3;
-    } else if (outcome->result != CalibrationResult::kAccepted) {
-      std::fprintf(
-          stderr, "mjc calibrate: node %d refused the calibration: %s\n", node,
-          host::DescribeCalibrationResult(outcome->result, outcome->detail).c_str());
-      *status = 4;
-    } else {
-      // Read back: the board must hold exactly what was sent.
-      const auto back = host::DownloadCalibration(iface, node, &why);
-      const bool same = back && back->backlash.c_right == record.backlash.c_right &&
-                        back->backlash.c_left == record.backlash.c_left &&
-                        back->backlash.alpha == record.backlash.alpha &&
-                        back->sea_stiffness == record.sea_stiffness &&
-                        back->joint_zero_count == record.joint_zero_count;
-      if (!same) {
-        std::fprintf(stderr, "mjc calibrate: node %d read back %s\n", node,
-                     back ? "a different calibration" : why.c_str());
-        *status = 6;
-        return;
-      }
-      persist();
-      std::printf("node %d calibrated (upload %.1f ms, read back identical); saved %s\n",
-                  node, outcome->elapsed_ms, out_path.c_str());
-      *status = 0;
+
+    const auto sent = host::UploadCalibration(iface, node, record, 1000, &why);
+    const std::string saved = "; the fit is saved in " + out_path;
+    switch (sent.status) {
+      case host::UploadStatus::kLinkFailed:
+        throw Failure("cannot upload to " + who + ": " + why + saved);
+      case host::UploadStatus::kNoAnswer:
+        throw Failure(Exit::kNoAnswer,
+                      who + " did not answer the upload (" + why + ")" + saved);
+      case host::UploadStatus::kMalformedReply:
+        throw Failure(Exit::kNoAnswer, "malformed answer to the upload: " + why + saved);
+      case host::UploadStatus::kAnswered:
+        break;
     }
+    if (sent.result != CalibrationResult::kAccepted) {
+      throw Failure(Exit::kRefused,
+                    who + " refused the calibration: " +
+                        host::DescribeCalibrationResult(sent.result, sent.detail) +
+                        saved);
+    }
+    // Read back: the board must hold exactly what was sent.
+    const auto back = host::ReadCalibration(board, &why);
+    if (!back) throw Failure(NoAnswer(board), "cannot read the calibration back: " + why);
+    if (!back->calibrated || !SameCalibration(back->record, record)) {
+      throw Failure(Exit::kRefused, who + " holds a different calibration than was sent");
+    }
+    std::printf("node %d calibrated (upload %.1f ms, read back identical); saved %s\n",
+                node, sent.elapsed_ms, out_path.c_str());
   });
 }
 

@@ -1,8 +1,19 @@
-// The mjc subcommands. Each Add* registers its subcommand (options and a callback) on
-// the CLI11 app; the callbacks return the process exit status through `status`.
+// The mjc subcommands and what they share. Each Add* registers its subcommand (options
+// and a callback) on the CLI11 app. A callback that returns has succeeded (exit 0); one
+// that fails throws, Failure with its exit status or any std::exception (kFailure), and
+// main prints "mjc <subcommand>: <what>" on one line.
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "mjc/host/board_client.h"
+#include "mjc/host/can_link.h"
+#include "mjc/protocol/can_frame.h"
 
 namespace mjc::cli {
 
@@ -12,13 +23,82 @@ namespace mjc::cli {
 inline constexpr double kMinFrequencyHz = 0.08;
 inline constexpr double kMaxFrequencyHz = 5.0;
 
-void AddSim(CLI::App& app, int* status);
-void AddLog(CLI::App& app, int* status);
-void AddCal(CLI::App& app, int* status);
-void AddCalibrate(CLI::App& app, int* status);
-void AddBusload(CLI::App& app, int* status);
-void AddTrial(CLI::App& app, int* status);
-void AddReport(CLI::App& app, int* status);
-void AddMonitor(CLI::App& app, int* status);
+// The exit status of every subcommand. Stable: scripts test them.
+enum class Exit : int {
+  kOk = 0,
+  kFailure = 1,   // on this side: bad or unwritable file, interface, link, unusable fit
+  kUsage = 2,     // bad command line
+  kNoAnswer = 3,  // a node did not answer, went silent or did not finish in time
+  kRefused = 4,   // the board refused, holds no calibration, or did not keep it
+  kFaulted = 5,   // the board faulted while carrying it out
+};
+
+// The footer of every --help.
+inline constexpr const char* kExitStatusHelp =
+    "Exit status: 0 done; 1 failed on this side (input or output file, interface, "
+    "link, unusable fit, gnuplot); 2 bad command line; 3 a node did not answer, went "
+    "silent or did not finish in time; 4 the board refused, holds no calibration or "
+    "did not keep what was sent; 5 the board faulted.";
+
+class Failure : public std::runtime_error {
+ public:
+  Failure(Exit exit, const std::string& what) : std::runtime_error(what), exit_(exit) {}
+  explicit Failure(const std::string& what) : Failure(Exit::kFailure, what) {}
+  Exit exit() const { return exit_; }
+
+ private:
+  Exit exit_;
+};
+
+// The status of a request to `board` that got no answer: kFailure when this side's
+// link failed, kNoAnswer when the board stayed silent.
+inline Exit NoAnswer(const host::BoardClient& board) {
+  return board.link_failed() ? Exit::kFailure : Exit::kNoAnswer;
+}
+
+// --iface, defaulting to vcan0.
+inline void AddIfaceOption(CLI::App* cmd, std::string* iface) {
+  *iface = "vcan0";
+  cmd->add_option("--iface", *iface, "CAN interface")->capture_default_str();
+}
+
+// --node into an int (one node) or a std::vector<int> (several), checked against the
+// protocol's node range.
+template <class T>
+CLI::Option* AddNodeOption(CLI::App* cmd, T* node, const char* help = "Node id") {
+  return cmd->add_option("--node", *node, help)
+      ->check(CLI::Range(int{protocol::kMinNode}, int{protocol::kMaxNode}))
+      ->capture_default_str();
+}
+
+// The raw CAN link on `iface`; throws Failure naming the interface when it cannot open.
+inline std::unique_ptr<host::SocketCanLink> OpenLink(const std::string& iface) {
+  std::string why;
+  auto link = host::SocketCanLink::Open(iface, &why);
+  if (!link) throw Failure(why);
+  return link;
+}
+
+namespace detail {
+inline std::atomic<bool> g_stop{false};
+inline void OnStopSignal(int) { g_stop = true; }
+}  // namespace detail
+
+// Makes SIGINT and SIGTERM end a long-running command cleanly (files flushed, counts
+// printed): the returned flag turns true when one arrives.
+inline const std::atomic<bool>& StopOnSignals() {
+  std::signal(SIGINT, detail::OnStopSignal);
+  std::signal(SIGTERM, detail::OnStopSignal);
+  return detail::g_stop;
+}
+
+void AddSim(CLI::App& app);
+void AddLog(CLI::App& app);
+void AddCal(CLI::App& app);
+void AddCalibrate(CLI::App& app);
+void AddBusload(CLI::App& app);
+void AddTrial(CLI::App& app);
+void AddReport(CLI::App& app);
+void AddMonitor(CLI::App& app);
 
 }  // namespace mjc::cli

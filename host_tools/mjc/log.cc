@@ -2,9 +2,11 @@
 // can-utils' log2asc and canplayer, Wireshark and python-can) or a CSV of every decoded
 // signal in physical units (one row a signal).
 #include <atomic>
+#include <cerrno>
 #include <chrono>
-#include <csignal>
+#include <cinttypes>
 #include <cstdio>
+#include <cstring>
 #include <tuple>
 
 #include "commands.h"
@@ -16,15 +18,17 @@ namespace {
 
 using namespace mjc::protocol;
 
-std::atomic<bool> g_stop{false};
-void OnSignal(int) { g_stop = true; }
+// "1712345678.000123": the kernel's timestamp, exact to the microsecond.
+std::string Seconds(const host::ReceivedFrame& r) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%010" PRId64 ".%06" PRId64, r.timestamp_us / 1000000,
+                r.timestamp_us % 1000000);
+  return text;
+}
 
 void WriteCandump(std::FILE* out, const std::string& iface,
                   const host::ReceivedFrame& r) {
-  const auto sec = static_cast<long long>(r.timestamp_s);
-  const auto usec =
-      static_cast<long long>((r.timestamp_s - static_cast<double>(sec)) * 1e6);
-  std::fprintf(out, "(%010lld.%06lld) %s %03X%s", sec, usec, iface.c_str(), r.frame.id,
+  std::fprintf(out, "(%s) %s %03X%s", Seconds(r).c_str(), iface.c_str(), r.frame.id,
                r.frame.fd ? "##0" : "#");
   for (int i = 0; i < r.frame.length; ++i)
     std::fprintf(out, "%02X", r.frame.data[static_cast<std::size_t>(i)]);
@@ -37,14 +41,14 @@ bool WriteSignals(std::FILE* out, const host::ReceivedFrame& r) {
     return false;
   M m;
   if (Decode(r.frame, &m) != DecodeError::kOk) {
-    std::fprintf(out, "%.6f,%03X,%u,%s,malformed,\n", r.timestamp_s, r.frame.id,
+    std::fprintf(out, "%s,%03X,%u,%s,malformed,\n", Seconds(r).c_str(), r.frame.id,
                  NodeOf(r.frame.id), Message<M>::kName);
     return true;
   }
   std::apply(
       [&](const auto&... s) {
         ((std::fprintf(
-             out, "%.6f,%03X,%u,%s,%s,%.12g\n", r.timestamp_s, r.frame.id,
+             out, "%s,%03X,%u,%s,%s,%.12g\n", Seconds(r).c_str(), r.frame.id,
              NodeOf(r.frame.id), Message<M>::kName, s.name,
              static_cast<double>(std::decay_t<decltype(s)>::Wire::ToRaw(m.*(s.member))) *
                  s.factor())),
@@ -60,20 +64,20 @@ void WriteCsv(std::FILE* out, const host::ReceivedFrame& r) {
       [&](auto... m) { ((known = known || WriteSignals<decltype(m)>(out, r)), ...); },
       AllMessages{});
   if (!known) {
-    std::fprintf(out, "%.6f,%03X,%u,other,length,%u\n", r.timestamp_s, r.frame.id,
+    std::fprintf(out, "%s,%03X,%u,other,length,%u\n", Seconds(r).c_str(), r.frame.id,
                  NodeOf(r.frame.id), r.frame.length);
   }
 }
 
 }  // namespace
 
-void AddLog(CLI::App& app, int* status) {
+void AddLog(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("log", "Record the bus (candump log format or decoded CSV)");
-  static std::string iface = "vcan0", format = "candump", out_path;
+  static std::string iface, format = "candump", out_path;
   static double seconds = 0;
   static long frames = 0;
-  cmd->add_option("--iface", iface, "CAN interface")->capture_default_str();
+  AddIfaceOption(cmd, &iface);
   cmd->add_option("--format", format, "candump or csv")
       ->check(CLI::IsMember({"candump", "csv"}))
       ->capture_default_str();
@@ -82,43 +86,59 @@ void AddLog(CLI::App& app, int* status) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--frames", frames, "Stop after this many frames (0: no limit)")
       ->check(CLI::NonNegativeNumber);
-  cmd->callback([status] {
+  cmd->callback([] {
     std::string why;
-    auto link = host::SocketCanLink::Open(iface, &why);
-    if (!link) {
-      std::fprintf(stderr, "mjc log: %s\n", why.c_str());
-      *status = 1;
-      return;
-    }
+    auto link = OpenLink(iface);
     std::FILE* out = out_path.empty() ? stdout : std::fopen(out_path.c_str(), "w");
     if (out == nullptr) {
-      std::fprintf(stderr, "mjc log: cannot write %s\n", out_path.c_str());
-      *status = 1;
-      return;
+      throw Failure("cannot write " + out_path + ": " + std::strerror(errno));
     }
-    if (format == "csv") std::fputs("time_s,id,node,message,signal,value\n", out);
+    int write_error = 0;  // errno of the first failed write (disk full, closed pipe)
+    if (format == "csv" && std::fputs("time_s,id,node,message,signal,value\n", out) < 0)
+      write_error = errno;
     const auto deadline =
         std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     long written = 0;
-    // SIGINT/SIGTERM end the recording cleanly: the file is flushed and the counts
-    // printed, so a stopped logger loses nothing it received.
-    std::signal(SIGINT, OnSignal);
-    std::signal(SIGTERM, OnSignal);
-    while (!g_stop && (frames == 0 || written < frames) &&
-           (seconds == 0 || std::chrono::steady_clock::now() < deadline)) {
-      const auto r = link->Receive(100, &why);
-      if (!r) continue;
+    bool link_failed = false;
+    const auto done = [&] {
+      return link_failed || write_error != 0 || (frames > 0 && written >= frames);
+    };
+    // Writes the next frame that arrives within timeout_ms; false when none did.
+    const auto record = [&](int timeout_ms) {
+      const auto r = link->Receive(timeout_ms, &why);
+      link_failed = r.status == host::ReceiveStatus::kError;
+      if (!r) return false;
       if (format == "csv") {
         WriteCsv(out, *r);
       } else {
         WriteCandump(out, iface, *r);
       }
       ++written;
+      if (std::ferror(out)) write_error = errno;
+      return true;
+    };
+    // SIGINT/SIGTERM end the recording cleanly: what the socket already holds is still
+    // written (for at most a second), the file flushed and the counts printed, so a
+    // stopped logger loses nothing it received.
+    const std::atomic<bool>& stop = StopOnSignals();
+    while (!stop && !done() &&
+           (seconds == 0 || std::chrono::steady_clock::now() < deadline)) {
+      record(100);
     }
-    if (out != stdout) std::fclose(out);
+    const auto drain_until = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+    while (stop && !done() && std::chrono::steady_clock::now() < drain_until &&
+           record(0)) {
+    }
+    // Buffered lines meet the disk at fflush and fclose.
+    if (write_error == 0 && std::fflush(out) != 0) write_error = errno;
+    if (out != stdout && std::fclose(out) != 0 && write_error == 0) write_error = errno;
     std::fprintf(stderr, "mjc log: %ld frames, %llu dropped by the kernel\n", written,
                  static_cast<unsigned long long>(link->stats().rx_dropped));
-    *status = 0;
+    if (write_error != 0) {
+      throw Failure("error writing " + (out_path.empty() ? "stdout" : out_path) + ": " +
+                    std::strerror(write_error));
+    }
+    if (link_failed) throw Failure(why);
   });
 }
 

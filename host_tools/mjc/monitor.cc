@@ -1,11 +1,12 @@
 // mjc monitor: live values of one or more boards (state, calibration, fault, angles,
-// torque, power, energy), a line per node every interval. A node that has not sent a
-// heartbeat for two seconds is reported silent; the exit status is 3 if any was.
+// torque, power, energy), a line per node every interval, and a line for the bus once
+// it has reported errors (error frames, bus-off). A node that has not sent a heartbeat
+// for two seconds is reported silent; the exit status is then Exit::kNoAnswer.
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "commands.h"
@@ -13,9 +14,6 @@
 
 namespace mjc::cli {
 namespace {
-
-std::atomic<bool> g_stop{false};
-void OnSignal(int) { g_stop = true; }
 
 const char* StateName(protocol::BoardState s) {
   switch (s) {
@@ -33,47 +31,41 @@ const char* StateName(protocol::BoardState s) {
 
 }  // namespace
 
-void AddMonitor(CLI::App& app, int* status) {
+void AddMonitor(CLI::App& app) {
   auto* cmd = app.add_subcommand("monitor", "Live values of boards on the bus");
-  static std::string iface = "vcan0";
+  static std::string iface;
   static std::vector<int> nodes = {1};
   static double seconds = 0;
   static int interval_ms = 500;
-  cmd->add_option("--iface", iface, "CAN interface")->capture_default_str();
-  cmd->add_option("--node", nodes, "Node ids")
-      ->check(CLI::Range(1, 8))
-      ->capture_default_str();
+  AddIfaceOption(cmd, &iface);
+  AddNodeOption(cmd, &nodes, "Node ids");
   cmd->add_option("--seconds", seconds, "Stop after this long (0: until SIGINT)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--interval-ms", interval_ms, "Time between lines")
       ->check(CLI::Range(50, 60000))
       ->capture_default_str();
-  cmd->callback([status] {
-    std::string why;
+  cmd->callback([] {
+    // A link per node: each client filters its link to its own node.
     std::vector<std::unique_ptr<host::SocketCanLink>> links;
     std::vector<std::unique_ptr<host::BoardClient>> boards;
     for (int node : nodes) {
-      auto link = host::SocketCanLink::Open(iface, &why);
-      if (!link) {
-        std::fprintf(stderr, "mjc monitor: %s\n", why.c_str());
-        *status = 1;
-        return;
-      }
+      links.push_back(OpenLink(iface));
       boards.push_back(std::make_unique<host::BoardClient>(
-          link.get(), static_cast<std::uint8_t>(node)));
-      links.push_back(std::move(link));
+          links.back().get(), static_cast<std::uint8_t>(node)));
     }
-    std::signal(SIGINT, OnSignal);
-    std::signal(SIGTERM, OnSignal);
+    const std::atomic<bool>& stop = StopOnSignals();
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::chrono::steady_clock::time_point> last_heard(boards.size(), start);
     std::vector<std::uint32_t> last_tick(boards.size(), 0);
-    bool any_silent = false;
-    while (!g_stop) {
+    std::string silent;
+    std::string why;
+    while (!stop) {
       const auto until =
           std::chrono::steady_clock::now() + std::chrono::milliseconds(interval_ms);
       while (std::chrono::steady_clock::now() < until) {
-        for (auto& b : boards) b->Poll(5);
+        for (auto& b : boards) {
+          if (!b->Poll(5, &why)) throw Failure(why);
+        }
       }
       const auto now = std::chrono::steady_clock::now();
       for (std::size_t i = 0; i < boards.size(); ++i) {
@@ -84,7 +76,8 @@ void AddMonitor(CLI::App& app, int* status) {
         }
         if (now - last_heard[i] > std::chrono::seconds(2)) {
           std::printf("node %d: silent (no heartbeat for 2 s)\n", nodes[i]);
-          any_silent = true;
+          const std::string id = std::to_string(nodes[i]);
+          if (silent.find(" " + id + ",") == std::string::npos) silent += " " + id + ",";
           continue;
         }
         std::printf(
@@ -94,10 +87,20 @@ void AddMonitor(CLI::App& app, int* status) {
             static_cast<int>(s.fault), s.motor_rad, s.joint_rad, s.torque_Nm,
             s.power_W * 1e3, s.energy_J * 1e3);
       }
+      // Every link sees the interface's error frames: the first one's count them all.
+      const host::LinkStats& bus = links.front()->stats();
+      if (bus.error_frames > 0) {
+        std::printf("%s: %llu error frames (%llu bus-off) since start\n", iface.c_str(),
+                    static_cast<unsigned long long>(bus.error_frames),
+                    static_cast<unsigned long long>(bus.bus_off));
+      }
       std::fflush(stdout);
       if (seconds > 0 && now - start >= std::chrono::duration<double>(seconds)) break;
     }
-    *status = any_silent ? 3 : 0;
+    if (!silent.empty()) {
+      silent.pop_back();
+      throw Failure(Exit::kNoAnswer, "silent node(s):" + silent);
+    }
   });
 }
 

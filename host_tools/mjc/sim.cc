@@ -4,8 +4,8 @@
 // CAN tool see a board on the bus.
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
+#include <numeric>
 #include <thread>
 
 #include "commands.h"
@@ -16,22 +16,14 @@
 #include "mjc/sim/scenarios.h"
 
 namespace mjc::cli {
-namespace {
 
-std::atomic<bool> g_stop{false};
-void OnSignal(int) { g_stop = true; }
-
-}  // namespace
-
-void AddSim(CLI::App& app, int* status) {
+void AddSim(CLI::App& app) {
   auto* cmd = app.add_subcommand("sim", "Run a simulated joint board on a CAN interface");
-  static std::string iface = "vcan0", robot = "default", subject, flash_path;
+  static std::string iface, robot = "default", subject, flash_path;
   static int node = 1;
   static double seconds = 0, speed = 1;
-  cmd->add_option("--iface", iface, "CAN interface")->capture_default_str();
-  cmd->add_option("--node", node, "Node id")
-      ->check(CLI::Range(1, 8))
-      ->capture_default_str();
+  AddIfaceOption(cmd, &iface);
+  AddNodeOption(cmd, &node);
   cmd->add_option("--robot", robot, "Plant parameter set of the robot (name or .json)")
       ->capture_default_str();
   cmd->add_option("--subject", subject,
@@ -46,29 +38,17 @@ void AddSim(CLI::App& app, int* status) {
                   "Simulated seconds per wall second (0: as fast as possible)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->callback([status] {
+  cmd->callback([] {
     std::string why;
-    auto link = host::SocketCanLink::Open(iface, &why);
-    if (!link) {
-      std::fprintf(stderr, "mjc sim: %s\n", why.c_str());
-      *status = 1;
-      return;
-    }
+    auto link = OpenLink(iface);
     auto load = [](const std::string& s) {
       return s.find('/') != std::string::npos || s.ends_with(".json")
                  ? plant::LoadPlantParamsFile(s)
                  : plant::LoadPlantParams(s);
     };
-    plant::PlantParams params;
-    try {
-      params = load(robot);
-      params.integration.max_step_s = 33.4e-6;
-      if (!subject.empty()) params.interface = load(subject).interface;
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "mjc sim: %s\n", e.what());
-      *status = 1;
-      return;
-    }
+    plant::PlantParams params = load(robot);
+    params.integration.max_step_s = 33.4e-6;
+    if (!subject.empty()) params.interface = load(subject).interface;
     sim::SimBoard board(params, sim::DefaultBoardConfig());
     // Flash: two 2 KB pages for the calibration's A/B records, as on the board.
     hal::SimFlash flash(2, flash_path, &why);
@@ -84,16 +64,17 @@ void AddSim(CLI::App& app, int* status) {
     app::CanNodeConfig node_config;
     node_config.node = static_cast<std::uint8_t>(node);
     app::CanNode can(&board.app(), node_config, &store);
-    std::signal(SIGINT, OnSignal);
-    std::signal(SIGTERM, OnSignal);
+    const std::atomic<bool>& stop = StopOnSignals();
     std::fprintf(
         stderr, "mjc sim: node %d on %s (%s%s)\n", node, iface.c_str(), robot.c_str(),
         subject.empty() ? ", robot alone" : (", " + subject + " donned").c_str());
     const auto start = std::chrono::steady_clock::now();
     const double period = board.tick_period_s();
     std::uint64_t ticks = 0;
-    while (!g_stop && (seconds == 0 || static_cast<double>(ticks) * period < seconds)) {
-      while (auto f = link->Receive(0)) can.HandleFrame(f->frame);
+    while (!stop && (seconds == 0 || static_cast<double>(ticks) * period < seconds)) {
+      host::ReceiveResult r;
+      while ((r = link->Receive(0, &why))) can.HandleFrame(r->frame);
+      if (r.status == host::ReceiveStatus::kError) throw Failure(why);
       board.Tick();
       can.Poll();
       protocol::CanFrame out;
@@ -116,10 +97,7 @@ void AddSim(CLI::App& app, int* status) {
         static_cast<double>(ticks) * period,
         static_cast<unsigned long long>(link->stats().sent),
         static_cast<unsigned long long>(link->stats().tx_failed), c.handled, c.ignored,
-        c.malformed[1] + c.malformed[2] + c.malformed[3] + c.malformed[4] +
-            c.malformed[5],
-        c.tx_dropped);
-    *status = 0;
+        std::accumulate(c.malformed.begin(), c.malformed.end(), 0u), c.tx_dropped);
   });
 }
 

@@ -2,7 +2,8 @@
 // trials of five repetitions at one amplitude (--pause waits for Enter between trials,
 // to re-don); "amplitude": five repetitions at each amplitude. The board estimates and
 // integrates; this reports the middle three flexions of every trial: tables on stdout,
-// every window in windows.csv, a figure (gnuplot) in the output folder.
+// every window in windows.csv (rewritten after each trial, so a later failure loses
+// nothing), a figure (gnuplot) in the output folder.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -13,27 +14,39 @@
 #include "commands.h"
 #include "mjc/host/trial_report.h"
 #include "mjc/host/trial_runner.h"
+#include "mjc/host/units.h"
 
 namespace mjc::cli {
 namespace {
 
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+Exit ExitOf(host::TrialEnd end) {
+  switch (end) {
+    case host::TrialEnd::kCompleted:
+      return Exit::kOk;
+    case host::TrialEnd::kLinkFailed:
+      return Exit::kFailure;
+    case host::TrialEnd::kNoAnswer:
+      return Exit::kNoAnswer;
+    case host::TrialEnd::kRefused:
+      return Exit::kRefused;
+    case host::TrialEnd::kFaulted:
+      return Exit::kFaulted;
+  }
+  return Exit::kFailure;
+}
 
 }  // namespace
 
-void AddTrial(CLI::App& app, int* status) {
+void AddTrial(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("trial", "Run the paper's repeatability or amplitude protocol");
-  static std::string iface = "vcan0", protocol_name = "repeatability",
-                     out_dir = "out/trial";
+  static std::string iface, protocol_name = "repeatability", out_dir = "out/trial";
   static int node = 1, trials = 5, reps = 5;
   static double amplitude_deg = 25, frequency_hz = 0.5, rest_s = 1.5;
   static std::vector<double> amplitudes = {6, 8, 11, 15, 20, 25};
   static bool pause = false;
-  cmd->add_option("--iface", iface, "CAN interface")->capture_default_str();
-  cmd->add_option("--node", node, "Node id")
-      ->check(CLI::Range(1, 8))
-      ->capture_default_str();
+  AddIfaceOption(cmd, &iface);
+  AddNodeOption(cmd, &node);
   cmd->add_option("--protocol", protocol_name, "repeatability or amplitude")
       ->check(CLI::IsMember({"repeatability", "amplitude"}))
       ->capture_default_str();
@@ -57,22 +70,18 @@ void AddTrial(CLI::App& app, int* status) {
       ->capture_default_str();
   cmd->add_flag("--pause", pause, "Wait for Enter between trials (re-donning)");
   cmd->add_option("--out", out_dir, "Output folder")->capture_default_str();
-  cmd->callback([status] {
-    std::string why;
-    auto link = host::SocketCanLink::Open(iface, &why);
-    if (!link) {
-      std::fprintf(stderr, "mjc trial: %s\n", why.c_str());
-      *status = 1;
-      return;
-    }
+  cmd->callback([] {
+    // The output folder first: an unwritable one is found before the trials run.
     std::filesystem::create_directories(out_dir);
+    std::vector<host::TrialWindows> runs;
+    host::WriteWindowsCsv(runs, out_dir);
+    auto link = OpenLink(iface);
     host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
     const bool repeatability = protocol_name == "repeatability";
     const std::vector<double> plan =
         repeatability
             ? std::vector<double>(static_cast<std::size_t>(trials), amplitude_deg)
             : amplitudes;
-    std::vector<host::TrialWindows> runs;
     for (std::size_t t = 0; t < plan.size(); ++t) {
       if (pause && t > 0) {
         std::fprintf(stderr, "re-don, then press Enter for trial %zu/%zu\n", t + 1,
@@ -81,11 +90,12 @@ void AddTrial(CLI::App& app, int* status) {
         std::getline(std::cin, line);
       }
       protocol::TrialConfig config;
-      config.amplitude = Angle::Quantize(plan[t] * kDeg);
+      config.amplitude = Angle::Quantize(host::DegToRad(plan[t]));
       config.frequency_mHz = static_cast<std::uint16_t>(std::lround(frequency_hz * 1000));
       config.repetitions = static_cast<std::uint8_t>(reps);
       config.rest_100ms = static_cast<std::uint8_t>(std::lround(rest_s * 10));
       const double timeout = (2 * rest_s + reps / frequency_hz) * 3 + 10;
+      const std::uint64_t broken_before = board.incomplete_windows();
       const auto trial = host::RunBoardTrial(
           board, config,
           [&](const host::BoardWindow& w) {
@@ -96,21 +106,31 @@ void AddTrial(CLI::App& app, int* status) {
           timeout);
       std::fputc('\n', stderr);
       if (!trial.completed) {
-        std::fprintf(stderr, "mjc trial: node %d: %s\n", node, trial.error.c_str());
-        *status = 3;
-        return;
+        throw Failure(ExitOf(trial.end), "node " + std::to_string(node) + ", trial " +
+                                             std::to_string(t + 1) + ": " + trial.error +
+                                             " (earlier trials are in windows.csv)");
       }
-      runs.push_back({plan[t], trial.windows});
+      // A flexion and an extension window a repetition: fewer means some were lost on
+      // the bus (the tables then use those that arrived).
+      const auto expected = 2 * static_cast<std::size_t>(reps);
+      if (trial.windows.size() != expected) {
+        std::fprintf(
+            stderr,
+            "mjc trial: trial %zu: %zu of %zu windows arrived (%llu lost a part "
+            "on the bus)\n",
+            t + 1, trial.windows.size(), expected,
+            static_cast<unsigned long long>(board.incomplete_windows() - broken_before));
+      }
+      runs.push_back({plan[t], static_cast<std::uint16_t>(reps), trial.windows});
+      host::WriteWindowsCsv(runs, out_dir);
     }
-    host::WriteWindowsCsv(runs, out_dir);
-    std::fputs(
-        host::TrialTables(runs, static_cast<std::uint16_t>(reps), repeatability).c_str(),
-        stdout);
-    if (!host::PlotTrials(out_dir, &why))
-      std::fprintf(stderr, "mjc trial: %s\n", why.c_str());
-    std::printf("windows: %s/windows.csv, figure: %s/eta.png\n", out_dir.c_str(),
-                out_dir.c_str());
-    *status = 0;
+    std::fputs(host::TrialTables(runs, repeatability).c_str(), stdout);
+    std::printf("windows: %s/windows.csv\n", out_dir.c_str());
+    std::string why;
+    if (!host::PlotTrials(out_dir, repeatability, &why)) {
+      throw Failure("no figure: " + why + " (the tables and windows.csv are saved)");
+    }
+    std::printf("figure: %s/eta.png\n", out_dir.c_str());
   });
 }
 

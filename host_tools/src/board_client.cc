@@ -7,6 +7,7 @@ namespace mjc::host {
 using namespace mjc::protocol;
 
 BoardClient::BoardClient(CanLink* link, std::uint8_t node) : link_(link), node_(node) {
+  // Only a saving: Handle checks the node itself, so a link that cannot filter works.
   const IdFilter only_node{node, 0x00F};
   std::string why;
   link_->SetFilters({&only_node, 1}, &why);
@@ -16,11 +17,11 @@ std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int tim
                                                        std::string* why) {
   const std::uint8_t seq = ++sequence_;
   last_result_.reset();
-  if (!link_->Send(Encode(protocol::Command{code, seq}, node_), why)) return std::nullopt;
+  if (!Send(protocol::Command{code, seq}, why)) return std::nullopt;
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
   while (std::chrono::steady_clock::now() < deadline) {
-    Poll(10);
+    if (!Poll(10, why)) return std::nullopt;
     if (last_result_ && last_result_->sequence == seq && last_result_->code == code) {
       return last_result_->outcome;
     }
@@ -33,11 +34,11 @@ std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int tim
 std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
                                                    std::string* why) {
   last_param_.reset();
-  if (!link_->Send(Encode(ParamRead{id}, node_), why)) return std::nullopt;
+  if (!Send(ParamRead{id}, why)) return std::nullopt;
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
   while (std::chrono::steady_clock::now() < deadline) {
-    Poll(10);
+    if (!Poll(10, why)) return std::nullopt;
     if (last_param_ && last_param_->id == id) {
       if (last_param_->status != ParamStatus::kOk) {
         *why = "node " + std::to_string(node_) + " answered parameter " +
@@ -53,23 +54,43 @@ std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
   return std::nullopt;
 }
 
-bool BoardClient::SendTrialConfig(const TrialConfig& config, std::string* why) {
-  return link_->Send(Encode(config, node_), why);
-}
-
-bool BoardClient::Poll(int timeout_ms) {
-  bool any = false;
-  for (auto r = link_->Receive(timeout_ms); r; r = link_->Receive(0)) {
-    Handle(r->frame);
-    any = true;
-  }
-  return any;
+bool BoardClient::Poll(int timeout_ms, std::string* why) {
+  ReceiveResult r = link_->Receive(timeout_ms, why);
+  for (; r; r = link_->Receive(0, why)) Handle(r->frame);
+  if (r.status == ReceiveStatus::kError) link_failed_ = true;
+  return !link_failed_;
 }
 
 std::vector<BoardWindow> BoardClient::TakeWindows() {
   std::vector<BoardWindow> out;
   out.swap(windows_);
   return out;
+}
+
+std::vector<AngleSample> BoardClient::TakeAngles() {
+  std::vector<AngleSample> out;
+  out.swap(angles_);
+  return out;
+}
+
+// A window is kept only when its five parts arrive complete and in order (the board
+// sends them back to back, header first, with ascending ids, so the bus keeps the
+// order): a lost or refused part drops the window rather than mixing two windows.
+bool BoardClient::AcceptWindowPart(int part) {
+  const bool in_progress = last_part_ >= 0;
+  if (part == 0 || !in_progress || part <= last_part_) {  // a new window
+    if (in_progress && !broken_) ++incomplete_windows_;   // the last one never ended
+    broken_ = part != 0;                                  // begun without its header
+    if (broken_) ++incomplete_windows_;
+    if (part == 0) partial_ = BoardWindow{};
+  } else if (part != last_part_ + 1 && !broken_) {  // a part skipped
+    broken_ = true;
+    ++incomplete_windows_;
+  }
+  const bool keep = !broken_;
+  last_part_ = part == 4 ? -1 : part;
+  if (part == 4) broken_ = false;
+  return keep;
 }
 
 void BoardClient::Handle(const CanFrame& f) {
@@ -96,7 +117,6 @@ void BoardClient::Handle(const CanFrame& f) {
       status_.heard = true;
       status_.state = h.state;
       status_.calibrated = h.calibrated;
-      status_.bridge_enabled = h.bridge_enabled;
       status_.fault = h.fault;
       status_.tick = h.tick;
       return;
@@ -114,6 +134,7 @@ void BoardClient::Handle(const CanFrame& f) {
       if (ok(Decode(f, &a))) {
         status_.motor_rad = a.motor.ToDouble();
         status_.joint_rad = a.joint.ToDouble();
+        if (keep_angles_) angles_.push_back({status_.motor_rad, status_.joint_rad});
       }
       return;
     }
@@ -132,11 +153,10 @@ void BoardClient::Handle(const CanFrame& f) {
       if (ok(Decode(f, &e))) status_.energy_J = e.energy.ToDouble();
       return;
     }
-    // A window travels as five frames, header first and ticks last, sent back to back.
+    // A window travels as five frames (see AcceptWindowPart).
     case Function::kWindowHeader: {
       WindowHeader h;
-      if (!ok(Decode(f, &h))) return;
-      partial_ = BoardWindow{};
+      if (!ok(Decode(f, &h)) || !AcceptWindowPart(0)) return;
       partial_.motion = h.motion;
       partial_.repetition = h.repetition;
       partial_.eta_valid = h.eta_valid;
@@ -145,28 +165,28 @@ void BoardClient::Handle(const CanFrame& f) {
     }
     case Function::kWindowEnergy: {
       WindowEnergy e;
-      if (!ok(Decode(f, &e))) return;
+      if (!ok(Decode(f, &e)) || !AcceptWindowPart(1)) return;
       partial_.loading_J = e.loading.ToDouble();
       partial_.unloading_J = e.unloading.ToDouble();
       return;
     }
     case Function::kWindowWork: {
       WindowWork w;
-      if (!ok(Decode(f, &w))) return;
+      if (!ok(Decode(f, &w)) || !AcceptWindowPart(2)) return;
       partial_.positive_J = w.positive.ToDouble();
       partial_.negative_J = w.negative.ToDouble();
       return;
     }
     case Function::kWindowPeaks: {
       WindowPeaks p;
-      if (!ok(Decode(f, &p))) return;
+      if (!ok(Decode(f, &p)) || !AcceptWindowPart(3)) return;
       partial_.peak_power_W = p.peak_power.ToDouble();
       partial_.peak_torque_Nm = p.peak_torque.ToDouble();
       return;
     }
     case Function::kWindowTicks: {
       WindowTicks t;
-      if (!ok(Decode(f, &t))) return;
+      if (!ok(Decode(f, &t)) || !AcceptWindowPart(4)) return;
       partial_.start_tick = t.start_tick;
       partial_.peak_tick = t.start_tick + t.peak_offset;
       partial_.end_tick = t.start_tick + t.end_offset;

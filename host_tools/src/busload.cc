@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "mjc/protocol/messages.h"
+
 namespace mjc::host {
 
 double FrameTimeS(int n, const BusTiming& t) {
@@ -17,34 +19,49 @@ double FrameTimeS(int n, const BusTiming& t) {
   return nominal_bits / t.nominal_bps + data_bits / t.data_bps;
 }
 
-BusLoad ComputeBusLoad(const app::CanNodeConfig& r, int boards, const BusTiming& t,
-                       double setpoint_hz) {
+namespace {
+
+using namespace mjc::protocol;
+
+// Frames per second each board sends of every window part: two windows (flexion and
+// extension) per cycle, at most 2 Hz cycles in the paper's protocols.
+constexpr double kWindowsHz = 4.0;
+// The host's heartbeat to each board, Hz.
+constexpr double kHostHeartbeatHz = 10.0;
+
+}  // namespace
+
+BusLoad ComputeBusLoad(const app::CanNodeConfig& r, int boards, const BusTiming& t) {
   BusLoad load;
-  auto add = [&](const char* name, int bytes, double hz) {
-    BusLoadLine line{name, bytes, hz, hz * boards * FrameTimeS(bytes, t)};
+  auto add = [&]<class M>(M, double hz, const char* suffix = "") {
+    const int bytes = Message<M>::kLength;
+    BusLoadLine line{std::string(Message<M>::kName) + suffix, bytes, hz,
+                     hz * boards * FrameTimeS(bytes, t)};
     load.total_fraction += line.load_fraction;
     load.lines.push_back(line);
   };
-  add("TelemetryAngles", 8, r.angles_hz);
-  add("TelemetryTorque", 8, r.torque_hz);
-  add("TelemetryPower", 8, r.power_hz);
-  add("TelemetryEnergy", 8, r.energy_hz);
-  add("TelemetryControl", 8, r.control_hz);
-  add("Heartbeat", 8, r.heartbeat_hz);
-  // Window summaries: five frames per window, two windows per cycle, at most 2 Hz
-  // cycles in the paper's protocols.
-  add("Window* (5 frames, 4 windows/s)", 8, 20.0);
-  add("Setpoint (host)", 6, setpoint_hz);
-  add("HostHeartbeat (host)", 1, 10.0);
+  add(TelemetryAngles{}, r.angles_hz);
+  add(TelemetryTorque{}, r.torque_hz);
+  add(TelemetryPower{}, r.power_hz);
+  add(TelemetryEnergy{}, r.energy_hz);
+  add(TelemetryControl{}, r.control_hz);
+  add(Heartbeat{}, r.heartbeat_hz);
+  add(WindowHeader{}, kWindowsHz);
+  add(WindowEnergy{}, kWindowsHz);
+  add(WindowWork{}, kWindowsHz);
+  add(WindowPeaks{}, kWindowsHz);
+  add(WindowTicks{}, kWindowsHz);
+  add(HostHeartbeat{}, kHostHeartbeatHz, " (host)");
   return load;
 }
 
 double MaxTelemetryHz(app::CanNodeConfig rates, int boards, const BusTiming& timing,
                       double budget) {
   rates.angles_hz = 0;
-  const double rest = ComputeBusLoad(rates, boards, timing, 0).total_fraction;
+  const double rest = ComputeBusLoad(rates, boards, timing).total_fraction;
   if (rest >= budget) return 0;
-  return (budget - rest) / (boards * FrameTimeS(8, timing));
+  return (budget - rest) /
+         (boards * FrameTimeS(Message<TelemetryAngles>::kLength, timing));
 }
 
 std::string FormatBusLoad(const BusLoad& load, const BusTiming& t, int boards) {
@@ -79,8 +96,8 @@ std::string BusLoadReport(int boards, double nominal_bps, double data_bps) {
   const app::CanNodeConfig defaults;
   const BusTiming fd{true, nominal_bps, data_bps};
   const BusTiming classic{false, nominal_bps, nominal_bps};
-  std::string out = FormatBusLoad(ComputeBusLoad(defaults, boards, fd, 0), fd, boards);
-  out += FormatBusLoad(ComputeBusLoad(defaults, boards, classic, 0), classic, boards);
+  std::string out = FormatBusLoad(ComputeBusLoad(defaults, boards, fd), fd, boards);
+  out += FormatBusLoad(ComputeBusLoad(defaults, boards, classic), classic, boards);
   char line[120];
   std::snprintf(
       line, sizeof line,

@@ -7,18 +7,19 @@
 #include <exception>
 #include <limits>
 #include <nlopt.hpp>
-#include <numbers>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "mjc/host/units.h"
 
 namespace mjc::host {
 namespace {
 
 constexpr double kMaxOffsetRad = kMaxBacklashOffset.ToDouble();
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-// The firmware's α is a Scale (Q3.28): (0, 8).
-constexpr double kAlphaLimit = 8.0;
+// The firmware's legal α, both bounds exclusive: (1/8, 8).
+constexpr double kAlphaMin = kMinBacklashAlpha.ToDouble();
+constexpr double kAlphaMax = kMaxBacklashAlpha.ToDouble();
 
 struct PlayParams {
   double c_right;
@@ -35,7 +36,7 @@ std::string Number(double value, int digits) {
 
 // "1.2345° (0.021546 rad)".
 std::string Degrees(double rad) {
-  return Number(rad * kRadToDeg, 4) + "° (" + Number(rad, 6) + " rad)";
+  return Number(RadToDeg(rad), 4) + "° (" + Number(rad, 6) + " rad)";
 }
 
 std::string Count(std::size_t n) { return std::to_string(n); }
@@ -207,14 +208,16 @@ StageResult RunStage(nlopt::opt& optimiser, Objective& objective,
 
 std::optional<std::string> CheckOptions(const BacklashFitOptions& o) {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-  if (!o.fit_alpha && !(positive(o.alpha) && o.alpha < kAlphaLimit)) {
-    return "options.alpha = " + Number(o.alpha, 6) + " is outside the legal range (0, 8)";
+  // NaN fails every comparison, so it is refused too.
+  if (!o.fit_alpha && !(o.alpha > kAlphaMin && o.alpha < kAlphaMax)) {
+    return "options.alpha = " + Number(o.alpha, 6) +
+           " is outside the legal range (1/8, 8)";
   }
-  if (o.fit_alpha && !(positive(o.alpha_min) && o.alpha_min < o.alpha_max &&
-                       o.alpha_max < kAlphaLimit)) {
+  if (o.fit_alpha && !(o.alpha_min > kAlphaMin && o.alpha_min < o.alpha_max &&
+                       o.alpha_max < kAlphaMax)) {
     return "options.alpha_min = " + Number(o.alpha_min, 6) +
            ", alpha_max = " + Number(o.alpha_max, 6) +
-           ": the legal range is 0 < alpha_min < alpha_max < 8";
+           ": the legal range is 1/8 < alpha_min < alpha_max < 8";
   }
   if (o.global_max_samples < kMinBacklashFitSamples ||
       o.local_max_samples < kMinBacklashFitSamples) {
@@ -400,8 +403,6 @@ BacklashFit FitBacklash(std::span<const double> motor_rad,
   fit.rms_error_rad = std::sqrt(SumSquaredError(motor_rad, joint_rad, best, period) /
                                 static_cast<double>(n));
   const Engagement engagement = CountEngagement(motor_rad, joint_rad, best);
-  fit.right_engaged_samples = engagement.right;
-  fit.left_engaged_samples = engagement.left;
 
   const std::string summary =
       "c_r = " + Degrees(best.c_right) + ", c_l = " + Degrees(best.c_left) +
@@ -495,7 +496,7 @@ std::optional<BacklashConfig> ToFirmwareConfig(const BacklashFit& fit, std::stri
       return config;
     case BacklashConfigError::kAlphaOutOfRange:
       return refuse("alpha = " + Number(fit.alpha, 6) +
-                    " is outside the legal range (0, 8) of the firmware's Q3.28 Scale");
+                    " is outside the firmware's legal range (1/8, 8)");
     case BacklashConfigError::kOffsetOutOfRange:
       if (Abs(config.c_right) > kMaxBacklashOffset) {
         return refuse("c_right = " + Degrees(fit.c_right_rad) +

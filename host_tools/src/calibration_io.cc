@@ -2,22 +2,18 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 
-#include "mjc/host/board_client.h"
 #include "mjc/host/can_link.h"
+#include "mjc/host/units.h"
 #include "mjc/protocol/can_frame.h"
 #include "mjc/protocol/messages.h"
 
 namespace mjc::host {
-namespace {
-
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
-
-}  // namespace
 
 nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& r) {
-  return {{"c_right_deg", r.backlash.c_right.ToDouble() / kDeg},
-          {"c_left_deg", r.backlash.c_left.ToDouble() / kDeg},
+  return {{"c_right_deg", RadToDeg(r.backlash.c_right.ToDouble())},
+          {"c_left_deg", RadToDeg(r.backlash.c_left.ToDouble())},
           {"alpha", r.backlash.alpha.ToDouble()},
           {"sea_stiffness_Nm_per_rad", r.sea_stiffness.ToDouble()},
           {"joint_zero_count", r.joint_zero_count},
@@ -41,24 +37,38 @@ std::optional<protocol::CalibrationRecord> CalibrationFromJson(const nlohmann::j
     }
     return true;
   };
-  double c_right = 0, c_left = 0, alpha = 0, stiffness = 0, zero = 0;
+  // An integer field in 0..max, as the record's unsigned wire fields hold them; absent
+  // is 0 unless required.
+  auto integer = [&](const char* key, std::uint64_t max, bool required, auto* out) {
+    *out = 0;
+    if (!j.contains(key) && !required) return true;
+    const bool in_range =
+        j.contains(key) && j[key].is_number_integer() &&
+        (j[key].is_number_unsigned() || j[key].get<std::int64_t>() >= 0) &&
+        j[key].get<std::uint64_t>() <= max;
+    if (!in_range) {
+      *why = std::string("calibration: field '") + key + "' must be an integer in 0.." +
+             std::to_string(max);
+      return false;
+    }
+    *out = static_cast<std::remove_pointer_t<decltype(out)>>(j[key].get<std::uint64_t>());
+    return true;
+  };
+  using U32 = std::numeric_limits<std::uint32_t>;
+  double c_right = 0, c_left = 0, alpha = 0, stiffness = 0;
   if (!number("c_right_deg", &c_right) || !number("c_left_deg", &c_left) ||
       !number("alpha", &alpha) || !number("sea_stiffness_Nm_per_rad", &stiffness) ||
-      !number("joint_zero_count", &zero)) {
+      !integer("joint_zero_count", 16383, true, &r.joint_zero_count) ||
+      !integer("fit_rms_urad", U32::max(), false, &r.fit_rms_urad) ||
+      !integer("fit_lag_us", U32::max(), false, &r.fit_lag_us) ||
+      !integer("fitted_at_unix_s", std::numeric_limits<std::uint64_t>::max(), false,
+               &r.fitted_at_unix_s)) {
     return std::nullopt;
   }
-  r.backlash.c_right = Angle::Quantize(c_right * kDeg);
-  r.backlash.c_left = Angle::Quantize(c_left * kDeg);
+  r.backlash.c_right = Angle::Quantize(DegToRad(c_right));
+  r.backlash.c_left = Angle::Quantize(DegToRad(c_left));
   r.backlash.alpha = Scale::Quantize(alpha);
   r.sea_stiffness = Stiffness::Quantize(stiffness);
-  if (zero < 0 || zero > 16383 || zero != std::floor(zero)) {
-    *why = "calibration: joint_zero_count must be an integer in 0..16383";
-    return std::nullopt;
-  }
-  r.joint_zero_count = static_cast<std::uint16_t>(zero);
-  r.fit_rms_urad = j.value("fit_rms_urad", 0u);
-  r.fit_lag_us = j.value("fit_lag_us", 0u);
-  r.fitted_at_unix_s = j.value("fitted_at_unix_s", std::uint64_t{0});
   // The board's checks, run here first, so a bad file never reaches the bus.
   const auto bytes = protocol::EncodeCalibration(r);
   protocol::CalibrationRecord checked;
@@ -112,57 +122,64 @@ std::string DescribeCalibrationResult(protocol::CalibrationResult result,
   return "unknown result " + std::to_string(static_cast<int>(result));
 }
 
-std::optional<UploadOutcome> UploadCalibration(const std::string& iface, int node,
-                                               const protocol::CalibrationRecord& record,
-                                               int timeout_ms, std::string* why) {
+UploadOutcome UploadCalibration(const std::string& iface, int node,
+                                const protocol::CalibrationRecord& record, int timeout_ms,
+                                std::string* why) {
   using protocol::Function;
   const auto n = static_cast<std::uint8_t>(node);
+  UploadOutcome out;
   auto link = IsoTpLink::Open(
       iface, protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpToBoard), n),
       protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), n), why);
-  if (!link) return std::nullopt;
-  UploadOutcome out;
   const auto t0 = std::chrono::steady_clock::now();
-  const auto bytes = protocol::EncodeCalibration(record);
-  if (!link->Send(bytes, why))
-    return out;  // not answered: the send failed (no flow control)
+  if (!link || !link->Send(protocol::EncodeCalibration(record), why)) {
+    out.status = UploadStatus::kLinkFailed;
+    return out;
+  }
   const auto reply = link->Receive(timeout_ms, why);
   out.elapsed_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
           .count();
-  if (!reply || reply->size() != 2) return out;
-  out.answered = true;
+  if (!reply) {
+    out.status = UploadStatus::kNoAnswer;
+    return out;
+  }
+  if (reply->size() != 2) {
+    out.status = UploadStatus::kMalformedReply;
+    *why = "node " + std::to_string(node) + " answered with " +
+           std::to_string(reply->size()) + " bytes, not [result, detail]";
+    return out;
+  }
+  out.status = UploadStatus::kAnswered;
   out.result = static_cast<protocol::CalibrationResult>((*reply)[0]);
   out.detail = (*reply)[1];
   return out;
 }
 
-std::optional<protocol::CalibrationRecord> DownloadCalibration(const std::string& iface,
-                                                               int node,
-                                                               std::string* why) {
+std::optional<BoardCalibration> ReadCalibration(BoardClient& board, std::string* why) {
   using protocol::ParamId;
-  auto link = SocketCanLink::Open(iface, why);
-  if (!link) return std::nullopt;
-  BoardClient board(link.get(), static_cast<std::uint8_t>(node));
-  const auto calibrated = board.ReadParam(ParamId::kCalibrated, 500, why);
-  if (!calibrated) return std::nullopt;
-  if (*calibrated != 1) {
-    *why = "node " + std::to_string(node) + " is not calibrated";
+  std::int32_t value[6] = {};
+  const ParamId ids[6] = {ParamId::kCalibrated,           ParamId::kCalibrationRight,
+                          ParamId::kCalibrationLeft,      ParamId::kCalibrationAlpha,
+                          ParamId::kCalibrationStiffness, ParamId::kCalibrationJointZero};
+  for (int i = 0; i < 6; ++i) {
+    const auto v = board.ReadParam(ids[i], 500, why);
+    if (!v) return std::nullopt;
+    value[i] = *v;
+  }
+  if (value[5] < 0 || value[5] > 16383) {
+    *why = "node " + std::to_string(board.node()) + " reports joint zero count " +
+           std::to_string(value[5]) + ", outside 0..16383";
     return std::nullopt;
   }
-  protocol::CalibrationRecord r;
-  const auto right = board.ReadParam(ParamId::kCalibrationRight, 500, why);
-  const auto left = board.ReadParam(ParamId::kCalibrationLeft, 500, why);
-  const auto alpha = board.ReadParam(ParamId::kCalibrationAlpha, 500, why);
-  const auto stiffness = board.ReadParam(ParamId::kCalibrationStiffness, 500, why);
-  const auto zero = board.ReadParam(ParamId::kCalibrationJointZero, 500, why);
-  if (!right || !left || !alpha || !stiffness || !zero) return std::nullopt;
-  r.backlash.c_right = Angle::FromRaw(*right);
-  r.backlash.c_left = Angle::FromRaw(*left);
-  r.backlash.alpha = Scale::FromRaw(*alpha);
-  r.sea_stiffness = Stiffness::FromRaw(*stiffness);
-  r.joint_zero_count = static_cast<std::uint16_t>(*zero);
-  return r;
+  BoardCalibration out;
+  out.calibrated = value[0] == 1;
+  out.record.backlash.c_right = Angle::FromRaw(value[1]);
+  out.record.backlash.c_left = Angle::FromRaw(value[2]);
+  out.record.backlash.alpha = Scale::FromRaw(value[3]);
+  out.record.sea_stiffness = Stiffness::FromRaw(value[4]);
+  out.record.joint_zero_count = static_cast<std::uint16_t>(value[5]);
+  return out;
 }
 
 }  // namespace mjc::host

@@ -16,6 +16,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <thread>
 
 namespace mjc::host {
 namespace {
@@ -77,6 +78,16 @@ std::unique_ptr<SocketCanLink> SocketCanLink::Open(const std::string& interface,
     ::close(fd);
     return nullptr;
   }
+  // The smallest send buffer the kernel allows (it rounds 0 up to a few frames): a
+  // socket that has that much queued gets EAGAIN and poll() reports POLLOUT when the
+  // driver frees room, before the interface's own queue (txqueuelen, 10 on CAN) can
+  // fill and drop frames with ENOBUFS, which poll() cannot wait for (see DoSend).
+  const int send_buffer = 0;
+  if (::setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &send_buffer, sizeof send_buffer) < 0) {
+    Say(why, Errno("cannot set the send buffer on '" + interface + "'"));
+    ::close(fd);
+    return nullptr;
+  }
   // Eight boards at full rate are ~9,000 frames/s: 4 MB holds seconds of them while
   // the tool is busy (the kernel default, ~200 KB, holds about 0.2 s). Without
   // CAP_NET_ADMIN SO_RCVBUFFORCE fails and SO_RCVBUF is capped at rmem_max; either way
@@ -98,15 +109,6 @@ std::unique_ptr<SocketCanLink> SocketCanLink::Open(const std::string& interface,
 
 SocketCanLink::~SocketCanLink() { ::close(fd_); }
 
-bool SocketCanLink::ReceiveOwn(bool on, std::string* why) {
-  const int value = on ? 1 : 0;
-  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &value, sizeof value) < 0) {
-    Say(why, Errno("'" + interface_ + "': CAN_RAW_RECV_OWN_MSGS"));
-    return false;
-  }
-  return true;
-}
-
 bool SocketCanLink::DoSend(const protocol::CanFrame& frame, std::string* why) {
   canfd_frame raw{};
   raw.can_id = frame.id & CAN_SFF_MASK;
@@ -115,32 +117,44 @@ bool SocketCanLink::DoSend(const protocol::CanFrame& frame, std::string* why) {
               std::min<std::size_t>(frame.length, CANFD_MAX_DLEN));
   const std::size_t size = frame.fd ? CANFD_MTU : CAN_MTU;
   if (frame.fd) raw.flags = CANFD_BRS;
-  // A full transmit queue (ENOBUFS on CAN: the qdisc is full; EAGAIN on a
-  // non-blocking socket) drains in frame times: wait for room, a bounded number of
-  // times, rather than dropping.
-  constexpr int kAttempts = 50;
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+  // A full transmit queue drains in frame times: wait for room, up to kPatience, rather
+  // than dropping the frame or spinning. Two queues can be full. This socket's send
+  // buffer (EAGAIN) is what poll() watches: POLLOUT returns once the driver has sent
+  // frames and freed them, and Open keeps that buffer small so it fills first. The
+  // interface's queue (ENOBUFS: the frame was dropped on the way in, so the buffer
+  // stays free and POLLOUT is already set) also fills when other sockets keep it busy;
+  // then the wait is a pause of about one frame time (an 8-byte classical frame at
+  // 1 Mbit/s takes 135 µs with worst-case stuffing).
+  constexpr auto kPatience = std::chrono::milliseconds(100);
+  constexpr auto kFrameTime = std::chrono::microseconds(135);
+  const auto deadline = std::chrono::steady_clock::now() + kPatience;
+  for (;;) {
     const ssize_t n = ::write(fd_, &raw, size);
     if (n == static_cast<ssize_t>(size)) {
       ++stats_.sent;
       return true;
     }
-    if (n < 0 && (errno == ENOBUFS || errno == EAGAIN)) {
-      ++stats_.tx_retries;
-      bool error = false;
-      WaitFor(fd_, POLLOUT, 2, &error);  // ENOBUFS does not raise POLLOUT: also a pause
-      continue;
+    if (n >= 0 || (errno != ENOBUFS && errno != EAGAIN)) break;
+    const bool queue_full = errno == ENOBUFS;
+    const auto left = std::chrono::ceil<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      ++stats_.tx_failed;
+      Say(why, "'" + interface_ + "': transmit queue stayed full (" +
+                   (queue_full ? "ENOBUFS" : "EAGAIN") + ") for 100 ms");
+      return false;
     }
-    ++stats_.tx_failed;
-    Say(why, Errno("cannot send on '" + interface_ + "'"));
-    return false;
+    ++stats_.tx_retries;
+    bool error = false;
+    if (!WaitFor(fd_, POLLOUT, static_cast<int>(left.count()), &error) && error) break;
+    if (queue_full) std::this_thread::sleep_for(kFrameTime);
   }
   ++stats_.tx_failed;
-  Say(why, "'" + interface_ + "': transmit queue stayed full (ENOBUFS) for 100 ms");
+  Say(why, Errno("cannot send on '" + interface_ + "'"));
   return false;
 }
 
-std::optional<ReceivedFrame> SocketCanLink::DoReceive(int timeout_ms, std::string* why) {
+ReceiveResult SocketCanLink::DoReceive(int timeout_ms, std::string* why) {
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
   for (;;) {
@@ -157,40 +171,38 @@ std::optional<ReceivedFrame> SocketCanLink::DoReceive(int timeout_ms, std::strin
     if (n < 0) {
       if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
         Say(why, Errno("cannot receive on '" + interface_ + "'"));
-        return std::nullopt;
+        return {ReceiveStatus::kError, {}};
       }
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
                             deadline - std::chrono::steady_clock::now())
                             .count();
-      if (left <= 0) return std::nullopt;
+      if (left <= 0) return {ReceiveStatus::kTimeout, {}};
       bool error = false;
-      if (!WaitFor(fd_, POLLIN, static_cast<int>(left), &error)) {
-        if (error) Say(why, Errno("poll on '" + interface_ + "'"));
-        if (error) return std::nullopt;
+      if (!WaitFor(fd_, POLLIN, static_cast<int>(left), &error) && error) {
+        Say(why, Errno("poll on '" + interface_ + "'"));
+        return {ReceiveStatus::kError, {}};
       }
       continue;
     }
     if (raw.can_id & CAN_ERR_FLAG) {
       ++stats_.error_frames;
-      if (raw.can_id & CAN_ERR_BUSOFF) {
-        ++stats_.bus_off;
-        bus_off_ = true;
-      }
+      if (raw.can_id & CAN_ERR_BUSOFF) ++stats_.bus_off;
       continue;
     }
     if (raw.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG)) continue;  // not our protocol's
-    ReceivedFrame out;
-    out.frame.id = raw.can_id & CAN_SFF_MASK;
-    out.frame.length = raw.len;
-    out.frame.fd = n == static_cast<ssize_t>(CANFD_MTU);
-    std::memcpy(out.frame.data.data(), raw.data, std::min<std::size_t>(raw.len, 64));
+    ReceiveResult out{ReceiveStatus::kFrame, {}};
+    ReceivedFrame& r = out.received;
+    r.frame.id = raw.can_id & CAN_SFF_MASK;
+    r.frame.length = raw.len;
+    r.frame.fd = n == static_cast<ssize_t>(CANFD_MTU);
+    std::memcpy(r.frame.data.data(), raw.data, std::min<std::size_t>(raw.len, 64));
     for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr;
          c = CMSG_NXTHDR(&message, c)) {
       if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_TIMESTAMP) {
         timeval tv{};
         std::memcpy(&tv, CMSG_DATA(c), sizeof tv);
-        out.timestamp_s =
-            static_cast<double>(tv.tv_sec) + static_cast<double>(tv.tv_usec) * 1e-6;
+        r.timestamp_us = std::int64_t{tv.tv_sec} * 1000000 + tv.tv_usec;
+        r.timestamp_s = static_cast<double>(r.timestamp_us) * 1e-6;
       } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
         std::uint32_t dropped = 0;  // the socket's cumulative drop count
         std::memcpy(&dropped, CMSG_DATA(c), sizeof dropped);
@@ -198,7 +210,6 @@ std::optional<ReceivedFrame> SocketCanLink::DoReceive(int timeout_ms, std::strin
       }
     }
     ++stats_.received;
-    bus_off_ = false;
     return out;
   }
 }
@@ -240,27 +251,30 @@ class InProcessLink final : public CanLink {
   }
   bool DoSend(const protocol::CanFrame& frame, std::string*) override {
     std::lock_guard lock(bus_->mutex_);
-    const double now =
-        std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-            .count();
+    ReceivedFrame sent;
+    sent.frame = frame;
+    sent.timestamp_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                            std::chrono::system_clock::now().time_since_epoch())
+                            .count();
+    sent.timestamp_s = static_cast<double>(sent.timestamp_us) * 1e-6;
     for (InProcessLink* other : bus_->links_) {
-      if (other != this && other->Passes(frame)) other->queue_.push_back({frame, now});
+      if (other != this && other->Passes(frame)) other->queue_.push_back(sent);
     }
     ++stats_.sent;
     bus_->arrived_.notify_all();
     return true;
   }
-  std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string*) override {
+  ReceiveResult DoReceive(int timeout_ms, std::string*) override {
     std::unique_lock lock(bus_->mutex_);
     if (timeout_ms > 0) {  // a zero timeout only looks: no timed wait, no syscall
       bus_->arrived_.wait_for(lock, std::chrono::milliseconds(timeout_ms),
                               [this] { return !queue_.empty(); });
     }
-    if (queue_.empty()) return std::nullopt;
-    ReceivedFrame f = queue_.front();
+    if (queue_.empty()) return {ReceiveStatus::kTimeout, {}};
+    ReceiveResult out{ReceiveStatus::kFrame, queue_.front()};
     queue_.pop_front();
     ++stats_.received;
-    return f;
+    return out;
   }
   bool DoSetFilters(std::span<const IdFilter> filters, std::string*) override {
     std::lock_guard lock(bus_->mutex_);
@@ -332,7 +346,10 @@ std::optional<std::vector<std::uint8_t>> IsoTpLink::Receive(int timeout_ms,
   std::vector<std::uint8_t> buffer(4096);
   const ssize_t n = ::read(fd_, buffer.data(), buffer.size());
   if (n < 0) {
-    Say(why, Errno("ISO-TP receive on '" + interface_ + "'"));
+    // ECOMM: our last transfer failed because the peer sent no flow control in time.
+    Say(why, errno == ECOMM ? "no ISO-TP flow control from the peer on '" + interface_ +
+                                  "' (absent or silent)"
+                            : Errno("ISO-TP receive on '" + interface_ + "'"));
     return std::nullopt;
   }
   buffer.resize(static_cast<std::size_t>(n));

@@ -1,10 +1,13 @@
 #include "mjc/host/report.h"
 
+#include <sys/wait.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
+#include <cstring>
 #include <stdexcept>
 
 namespace mjc::host {
@@ -56,15 +59,30 @@ std::string CsvTable::Number(double v) {
 }
 
 void CsvTable::Write(const std::filesystem::path& path) const {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error("cannot write " + path.string());
-  auto line = [&out](const std::vector<std::string>& cells) {
-    for (std::size_t i = 0; i < cells.size(); ++i) out << (i ? "," : "") << cells[i];
-    out << '\n';
+  std::string text;
+  auto line = [&text](const std::vector<std::string>& cells) {
+    for (std::size_t i = 0; i < cells.size(); ++i) text += (i ? "," : "") + cells[i];
+    text += '\n';
   };
   line(columns_);
   for (const auto& r : rows_) line(r);
-  if (!out) throw std::runtime_error("error writing " + path.string());
+  WriteFile(path, text);
+}
+
+void WriteFile(const std::filesystem::path& path, std::string_view text) {
+  const auto fail = [&path](const char* what) {
+    throw std::runtime_error(std::string(what) + " " + path.string() + ": " +
+                             std::strerror(errno));
+  };
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) fail("cannot write");
+  if (std::fwrite(text.data(), 1, text.size(), f) != text.size()) {
+    const int error = errno;
+    std::fclose(f);
+    errno = error;
+    fail("error writing");
+  }
+  if (std::fclose(f) != 0) fail("error writing");  // buffered data meets the disk here
 }
 
 bool RunGnuplot(const std::filesystem::path& script, std::string* why) {
@@ -72,11 +90,15 @@ bool RunGnuplot(const std::filesystem::path& script, std::string* why) {
     *why = "gnuplot is not installed (apt-get install gnuplot-nox)";
     return false;
   }
+  // stdout is the tool's report: gnuplot's chatter goes to stderr.
   const std::string command = "cd '" + script.parent_path().string() + "' && gnuplot '" +
-                              script.filename().string() + "' 2>&1";
-  const int rc = std::system(command.c_str());
-  if (rc != 0) {
-    *why = "gnuplot failed on " + script.string() + " (exit " + std::to_string(rc) + ")";
+                              script.filename().string() + "' 1>&2";
+  const int status = std::system(command.c_str());
+  if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    *why = "gnuplot failed on " + script.string() +
+           (status != -1 && WIFEXITED(status)
+                ? " (exit " + std::to_string(WEXITSTATUS(status)) + ")"
+                : std::string(" (did not run to completion)"));
     return false;
   }
   return true;

@@ -10,37 +10,37 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
                          const std::function<void(const BoardWindow&)>& progress,
                          double timeout_s) {
   BoardTrial out;
+  const auto fail = [&out](TrialEnd end, std::string why) {
+    out.end = end;
+    out.error = std::move(why);
+    return out;
+  };
   std::string why;
   board.TakeWindows();
-  if (!board.SendTrialConfig(config, &why)) {
-    out.error = why;
-    return out;
-  }
+  if (!board.Send(config, &why)) return fail(TrialEnd::kLinkFailed, why);
   const auto outcome = board.Command(CommandCode::kStartTrial, 1000, &why);
   if (!outcome) {
-    out.error = why;
-    return out;
+    return fail(board.link_failed() ? TrialEnd::kLinkFailed : TrialEnd::kNoAnswer, why);
   }
   if (*outcome != CommandOutcomeCode::kAccepted) {
-    out.error = "the board refused the trial (outcome " +
-                std::to_string(static_cast<int>(*outcome)) + ")";
-    return out;
+    return fail(TrialEnd::kRefused, "the board refused the trial (outcome " +
+                                        std::to_string(static_cast<int>(*outcome)) + ")");
   }
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   bool running_seen = false;
   auto idle_since = std::chrono::steady_clock::time_point{};
   while (std::chrono::steady_clock::now() < deadline) {
-    board.Poll(20);
+    if (!board.Poll(20, &why)) return fail(TrialEnd::kLinkFailed, why);
     for (BoardWindow& w : board.TakeWindows()) {
       if (progress) progress(w);
       out.windows.push_back(w);
     }
     const BoardState state = board.status().state;
     if (state == BoardState::kFault) {
-      out.error = "the board faulted (fault " +
-                  std::to_string(static_cast<int>(board.status().fault)) + ")";
-      return out;
+      return fail(TrialEnd::kFaulted,
+                  "the board faulted (fault " +
+                      std::to_string(static_cast<int>(board.status().fault)) + ")");
     }
     if (state == BoardState::kRunning) running_seen = true;
     if (running_seen && state == BoardState::kIdle) {
@@ -49,14 +49,15 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
         idle_since = std::chrono::steady_clock::now();
       if (std::chrono::steady_clock::now() - idle_since >
           std::chrono::milliseconds(300)) {
+        out.end = TrialEnd::kCompleted;
         out.completed = true;
         return out;
       }
     }
   }
-  out.error = "the trial did not finish within " +
-              std::to_string(static_cast<int>(timeout_s)) + " s";
-  return out;
+  return fail(TrialEnd::kNoAnswer, "the trial did not finish within " +
+                                       std::to_string(static_cast<int>(timeout_s)) +
+                                       " s");
 }
 
 std::vector<BoardWindow> MiddleFlexions(const std::vector<BoardWindow>& windows,

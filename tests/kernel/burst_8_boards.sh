@@ -6,16 +6,44 @@
 set -u
 mjc=$1
 work=$(mktemp -d)
+
+# The logger is ready once the CAN core has registered its receiver on vcan0 (as in
+# smoke.sh; frames sent before would be missed). Pure bash: forks are slow under TCG.
+count_receivers() {
+  local f line
+  receivers=0
+  for f in /proc/net/can/rcvlist_*; do
+    while IFS= read -r line; do
+      [[ $line =~ ^\ +vcan0\ +[0-9A-Fa-f] ]] && receivers=$((receivers + 1))
+    done <"$f"
+  done
+}
+wait_receivers() {  # COUNT: wait (at most 10 s) until at least COUNT are registered
+  local i
+  for ((i = 0; i < 200; i++)); do
+    count_receivers
+    ((receivers >= $1)) && return 0
+    sleep 0.05
+  done
+  return 1
+}
+
+count_receivers
+base=$receivers
 "$mjc" log --iface vcan0 --out "$work/bus.log" 2>"$work/log.err" &
 logger=$!
-sleep 0.3
+if ! wait_receivers $((base + 1)); then
+  echo "FAIL the logger never listened: $(cat "$work/log.err")"
+  echo "0 passed, 1 failed"
+  exit 1
+fi
 pids=()
 for node in 1 2 3 4 5 6 7 8; do
   "$mjc" sim --iface vcan0 --node "$node" --speed 2 --seconds 6 2>"$work/sim$node.err" &
   pids+=($!)
 done
 wait "${pids[@]}"
-sleep 0.5
+# Every frame is in the logger's socket by now: on SIGINT it writes what it holds.
 kill -INT "$logger" 2>/dev/null
 wait "$logger"
 sent=0

@@ -2,11 +2,14 @@
 # mjc end to end on Debian's CAN stack (run inside the VM by scripts/kernel-vm): a
 # simulated board (`mjc sim`) on vcan0, `mjc log` recording, `mjc calibrate` running the
 # sweep, the fit and the ISO-TP upload over the bus; can-utils reading our log and
-# talking to the board; refusals with reasons and non-zero exits.
+# talking to the board; refusals with reasons, one line each, and their exit statuses
+# (host_tools/mjc/commands.h: Exit).
 # usage: mjc_end_to_end.sh <path of mjc>
 set -u
 mjc=$1
 work=$(mktemp -d)
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+plant=$here/../../sim_host/params/default.json
 passed=0
 failed=0
 check() {  # check <description> <command...>
@@ -21,37 +24,111 @@ check() {  # check <description> <command...>
   fi
 }
 
+# Readiness, as in smoke.sh: a listener started in the background is ready once the CAN
+# core has registered its receiver on vcan0 (under TCG that takes ~0.1 s; frames sent
+# before are missed). Pure bash: every fork costs ~50 ms under TCG.
+count_receivers() {
+  local f line
+  receivers=0
+  for f in /proc/net/can/rcvlist_*; do
+    while IFS= read -r line; do
+      [[ $line =~ ^\ +vcan0\ +[0-9A-Fa-f] ]] && receivers=$((receivers + 1))
+    done <"$f"
+  done
+}
+wait_receivers() {  # COUNT: wait (at most 10 s) until at least COUNT are registered
+  local i
+  for ((i = 0; i < 200; i++)); do
+    count_receivers
+    ((receivers >= $1)) && return 0
+    sleep 0.05
+  done
+  return 1
+}
+# A simulated board is on the bus once it prints "mjc sim: node N on vcan0" (after its
+# socket, plant and flash are set up).
+wait_sim() {  # ERRFILE NODE: wait (at most 20 s)
+  local i
+  for ((i = 0; i < 400; i++)); do
+    grep -q "mjc sim: node $2 on vcan0" "$1" 2>/dev/null && return 0
+    sleep 0.05
+  done
+  echo "node $2 never came up: $(cat "$1")"
+  return 1
+}
+# One line on stderr and exit status STATUS: the refusal contract.
+refuses() {  # STATUS ERRFILE COMMAND...: COMMAND exits STATUS with one stderr line
+  local want=$1 err=$2 got
+  shift 2
+  "$@" 2>"$err"
+  got=$?
+  echo "exit $got (want $want): $(cat "$err")"
+  [ "$got" -eq "$want" ] && [ "$(wc -l <"$err")" -eq 1 ]
+}
+
 "$mjc" sim --iface vcan0 --node 1 --speed 4 --seconds 120 2>"$work/sim.err" &
 sim=$!
 # A second board, with a subject's hand donned, for the trial.
 "$mjc" sim --iface vcan0 --node 2 --subject subject1 --speed 4 --seconds 120 2>"$work/sim2.err" &
 sim2=$!
+count_receivers
+base=$receivers
 "$mjc" log --iface vcan0 --seconds 4 --out "$work/bus.log" 2>"$work/log.err" &
 logger=$!
-sleep 0.5
+all_up() {
+  wait_sim "$work/sim.err" 1 && wait_sim "$work/sim2.err" 2 && wait_receivers $((base + 1))
+}
+check "the boards and the logger come up" all_up
 
+# Node 1 first holds a calibration with a distinctive SEA stiffness: calibrate must keep
+# it (it replaces only the backlash), not reset it to a default.
+cat >"$work/held.json" <<'JSON'
+{"c_right_deg": 1.1, "c_left_deg": -0.9, "alpha": 1.0, "sea_stiffness_Nm_per_rad": 0.65, "joint_zero_count": 0}
+JSON
+check "node 1 takes a calibration with stiffness 0.65" \
+  "$mjc" cal upload "$work/held.json" --iface vcan0 --node 1
 check "mjc calibrate: sweep, fit, upload over the bus" \
   "$mjc" calibrate --iface vcan0 --node 1 --frequency-hz 2 --cycles 6 --out "$work/cal.json"
-# The plant's slack is c_r 1.1°, c_l -0.9° (sim_host/params/default.json).
-r=$(sed -n 's/.*"c_right_deg": *\([-0-9.eE+]*\).*/\1/p' "$work/cal.json")
-l=$(sed -n 's/.*"c_left_deg": *\([-0-9.eE+]*\).*/\1/p' "$work/cal.json")
-echo "fitted c_r $r°, c_l $l° (plant 1.1001°, -0.8995°)"
-check "fitted offsets within 0.1° of the plant's" \
-  awk -v r="$r" -v l="$l" 'BEGIN { exit !(r != "" && l != "" && (r - 1.1001)^2 < 0.01 && (l + 0.8995)^2 < 0.01) }'
+# The plant's slack, from its parameter file; the fit is held to the product goal of
+# 0.05° (the simulated calibration tests hold it to the same).
+# (Here-strings, not process substitution: the VM has no /dev/fd.)
+read -r want_r want_l <<<"$(python3 -c "
+import json, math
+cable = json.load(open('$plant'))['cable']
+print(math.degrees(cable['c_right_rad']), math.degrees(cable['c_left_rad']))")"
+read -r r l stiffness <<<"$(python3 -c "
+import json
+c = json.load(open('$work/cal.json'))
+print(c['c_right_deg'], c['c_left_deg'], c['sea_stiffness_Nm_per_rad'])" 2>/dev/null)"
+echo "fitted c_r ${r:-?}°, c_l ${l:-?}° (plant ${want_r:-?}°, ${want_l:-?}°)"
+check "fitted offsets within 0.05° of the plant's" \
+  awk -v r="${r:-}" -v l="${l:-}" -v R="${want_r:-}" -v L="${want_l:-}" \
+  'BEGIN { exit !(r != "" && R != "" && (r - R)^2 < 0.05^2 && (l - L)^2 < 0.05^2) }'
+check "the calibration keeps the stiffness node 1 held" \
+  awk -v k="${stiffness:-}" 'BEGIN { exit !(k != "" && (k - 0.65)^2 < 1e-12) }'
 check "mjc cal show reads the saved calibration" "$mjc" cal show "$work/cal.json"
 check "mjc cal upload calibrates node 2 with node 1's file" \
   "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 2
 check "mjc cal download reads node 2's calibration back" \
-  sh -c "'$mjc' cal download --iface vcan0 --node 2 --out '$work/back.json' && grep -q c_right_deg '$work/back.json'"
+  sh -c "'$mjc' cal download --iface vcan0 --node 2 --out '$work/back.json' && grep -q c_right_deg '$work/back.json' && ! grep -q fit_rms_urad '$work/back.json'"
 check "mjc trial runs the amplitude protocol on node 2" \
   "$mjc" trial --iface vcan0 --node 2 --protocol amplitude --amplitudes 15 --reps 3 \
   --frequency-hz 2 --rest-s 0.2 --out "$work/trial"
 check "mjc report re-renders the trial's tables from windows.csv" \
-  sh -c "'$mjc' report '$work/trial' --protocol amplitude --reps 3 >'$work/report.out' && grep -q '15°' '$work/report.out' && test -s '$work/trial/report.md'"
+  sh -c "'$mjc' report '$work/trial' --protocol amplitude >'$work/report.out' && grep -q '15°' '$work/report.out' && test -s '$work/trial/report.md'"
+# The same trial again as trial 2 at 20°: two amplitudes, so the protocol is amplitude.
+mkdir -p "$work/two"
+{ cat "$work/trial/windows.csv"; tail -n +2 "$work/trial/windows.csv" | sed 's/^1,15,/2,20,/'; } \
+  >"$work/two/windows.csv"
+check "mjc report derives the amplitude protocol from windows.csv" \
+  sh -c "'$mjc' report '$work/two' >'$work/two.out' && grep -q '20°' '$work/two.out'"
+check "mjc report refuses a protocol its windows.csv contradicts, exit 1" \
+  refuses 1 "$work/contra.err" "$mjc" report "$work/two" --protocol repeatability
+check "  saying why" grep -q 'differ in amplitude' "$work/contra.err"
 check "mjc monitor shows node 2 live" \
   sh -c "'$mjc' monitor --iface vcan0 --node 2 --seconds 1 >'$work/monitor.out' && grep -q 'node 2: idle *calibrated' '$work/monitor.out'"
 check "mjc monitor reports an absent node silent, exit 3" \
-  sh -c "'$mjc' monitor --iface vcan0 --node 6 --seconds 2.5 >'$work/silent.out'; test \$? -eq 3 && grep -q 'node 6: silent' '$work/silent.out'"
+  sh -c "'$mjc' monitor --iface vcan0 --node 6 --seconds 2.5 >'$work/silent.out' 2>'$work/silent.err'; test \$? -eq 3 && grep -q 'node 6: silent' '$work/silent.out' && grep -q 'silent node(s): 6' '$work/silent.err'"
 check "every window of the trial reached the host (3 flexions, 3 extensions)" \
   sh -c "test \$(grep -c ',flexion,' '$work/trial/windows.csv') -eq 3 && test \$(grep -c ',extension,' '$work/trial/windows.csv') -eq 3"
 
@@ -60,9 +137,11 @@ check "mjc log wrote candump lines" grep -qE '^\([0-9]+\.[0-9]{6}\) vcan0 [0-9A-
 check "can-utils log2asc reads mjc's log" sh -c "log2asc -I '$work/bus.log' -O '$work/bus.asc' vcan0 && grep -q ' Rx ' '$work/bus.asc'"
 
 # cansend a stop command (node 1, sequence 0x2A): the board answers on 0x041.
+count_receivers
+base=$receivers
 candump -n 1 -T 2000 vcan0,041:7FF >"$work/answer.txt" 2>&1 &
 dumper=$!
-sleep 0.3
+wait_receivers $((base + 1))
 cansend vcan0 021#012A
 wait "$dumper"
 check "cansend command gets the board's CommandResult in candump" grep -q '041.*01 00 00 2A' "$work/answer.txt"
@@ -70,24 +149,45 @@ check "cansend command gets the board's CommandResult in candump" grep -q '041.*
 cat >"$work/bad.json" <<'JSON'
 {"c_right_deg": 1.0, "c_left_deg": 2.0, "alpha": 1.0, "sea_stiffness_Nm_per_rad": 0.63, "joint_zero_count": 0}
 JSON
-check "a calibration with c_l above c_r is refused before the bus" \
-  sh -c "! '$mjc' cal upload '$work/bad.json' --iface vcan0 --node 1 2>'$work/bad.err' && grep -q 'c_left above c_right' '$work/bad.err'"
+check "a calibration with c_l above c_r is refused before the bus, exit 1" \
+  refuses 1 "$work/bad.err" "$mjc" cal upload "$work/bad.json" --iface vcan0 --node 1
+check "  saying why" grep -q 'c_left above c_right' "$work/bad.err"
+cat >"$work/typed.json" <<'JSON'
+{"c_right_deg": 1.0, "c_left_deg": -1.0, "alpha": 1.0, "sea_stiffness_Nm_per_rad": 0.63, "joint_zero_count": 0, "fit_rms_urad": "small"}
+JSON
+check "a calibration field of the wrong type: one line, exit 1 (not an abort)" \
+  refuses 1 "$work/typed.err" "$mjc" cal show "$work/typed.json"
+check "  and the line names the command and the field" \
+  grep -q "^mjc cal show: .*'fit_rms_urad' must be an integer" "$work/typed.err"
+check "a negative fit field is refused, not wrapped" \
+  sh -c "sed 's/\"small\"/-5/' '$work/typed.json' >'$work/negative.json' && ! '$mjc' cal show '$work/negative.json' 2>/dev/null"
 check "an absent node is reported, exit 3" \
-  sh -c "'$mjc' cal upload '$work/cal.json' --iface vcan0 --node 5 --timeout-ms 300 2>'$work/absent.err'; test \$? -eq 3 && grep -q 'did not answer' '$work/absent.err'"
-check "a missing interface is reported" \
-  sh -c "! '$mjc' log --iface nosuch0 --seconds 1 2>'$work/noif.err' && grep -q nosuch0 '$work/noif.err'"
-check "a bad flag is reported, exit non-zero" sh -c "! '$mjc' sim --node 9 2>/dev/null"
+  refuses 3 "$work/absent.err" "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 5 --timeout-ms 300
+check "  as not answering" grep -q 'did not answer' "$work/absent.err"
+check "an unwritable trial folder is refused before the trial runs, exit 1" \
+  refuses 1 "$work/noout.err" "$mjc" trial --iface vcan0 --node 2 --out /proc/mjc/trial
+mkdir -p "$work/broken"
+printf 'not,a,trial\n' >"$work/broken/windows.csv"
+check "a windows.csv of another layout is refused, exit 1" \
+  refuses 1 "$work/broken.err" "$mjc" report "$work/broken"
+check "  saying why" grep -q 'header is not' "$work/broken.err"
+check "an unwritable calibration download is refused, exit 1" \
+  refuses 1 "$work/download.err" "$mjc" cal download --iface vcan0 --node 2 --out /proc/mjc.json
+check "a missing interface is reported, exit 1" \
+  refuses 1 "$work/noif.err" "$mjc" log --iface nosuch0 --seconds 1
+check "  naming it" grep -q nosuch0 "$work/noif.err"
+check "a bad flag is reported, exit 2" sh -c "'$mjc' sim --node 9 2>/dev/null; test \$? -eq 2"
 
 # A board with flash keeps its calibration over a restart.
 "$mjc" sim --iface vcan0 --node 3 --flash "$work/node3.flash" --speed 4 --seconds 30 2>"$work/sim3a.err" &
 sim3=$!
-sleep 0.5
+wait_sim "$work/sim3a.err" 3
 check "node 3 stores an uploaded calibration" "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 3
 kill "$sim3"
 wait "$sim3" 2>/dev/null
 "$mjc" sim --iface vcan0 --node 3 --flash "$work/node3.flash" --speed 4 --seconds 30 2>"$work/sim3b.err" &
 sim3=$!
-sleep 0.5
+wait_sim "$work/sim3b.err" 3
 check "restarted node 3 restores it from flash" grep -q 'restored calibration #1' "$work/sim3b.err"
 check "and reports it calibrated" \
   sh -c "'$mjc' cal download --iface vcan0 --node 3 >'$work/back3.json' && grep -q c_right_deg '$work/back3.json'"

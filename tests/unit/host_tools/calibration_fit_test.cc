@@ -2,7 +2,7 @@
 // operator written out here in double precision, independent of both the fit's cost
 // function and the firmware's fixed-point model, with the board's sensors modelled:
 // a 14-bit joint encoder with ~1 count of Gaussian noise and a 2048-CPR motor encoder
-// behind a 100:1 gearbox.
+// behind a 100:1 gearbox. And the calibration file the fit is saved in.
 #include "mjc/host/calibration_fit.h"
 
 #include <gtest/gtest.h>
@@ -11,12 +11,15 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "mjc/core/backlash.h"
+#include "mjc/host/calibration_io.h"
 
 namespace mjc::host {
 namespace {
@@ -151,7 +154,13 @@ TEST_P(BacklashFitRecovery, RecoversOffsetsWithinProductGoal) {
   EXPECT_NEAR(fit.c_right_rad, c.truth.c_right_deg * kDeg, kOffsetGoalRad);
   EXPECT_NEAR(fit.c_left_rad, c.truth.c_left_deg * kDeg, kOffsetGoalRad);
   EXPECT_LE(fit.c_left_rad, fit.c_right_rad);
-  EXPECT_NEAR(fit.alpha, c.truth.alpha, kAlphaGoalRelative * c.truth.alpha);
+  if (c.fit_alpha) {
+    // Fitted from a start of 1.0: recovering the truth is the check.
+    EXPECT_NEAR(fit.alpha, c.truth.alpha, kAlphaGoalRelative * c.truth.alpha);
+  } else {
+    // A fixed α (the truth here) must come back exactly as given, not refitted.
+    EXPECT_EQ(fit.alpha, options.alpha);
+  }
   // The optimiser reached the optimum: no worse than the truth on the same data. With
   // a decimated local stage the optimum is that of the kept samples, a hair off the
   // whole record's.
@@ -170,6 +179,7 @@ INSTANTIATE_TEST_SUITE_P(
                       FitCase{"BothNegative10kHz", {-0.3, -2.4}, false, 10000.0},
                       FitCase{"WideSlack1kHz", {4.0, -3.0}, false, 1000.0},
                       FitCase{"NoSlack1kHz", {0.4, 0.4}, false, 1000.0},
+                      FitCase{"AlphaFixedOffUnity1kHz", {1.3, -0.9, 1.08}, false, 1000.0},
                       FitCase{"AlphaFitted1kHz", {1.3, -0.9, 1.08}, true, 1000.0},
                       FitCase{"AlphaFitted10kHz", {0.6, -1.7, 0.93}, true, 10000.0}),
     [](const ::testing::TestParamInfo<FitCase>& param_info) {
@@ -359,12 +369,17 @@ TEST(BacklashFitRefuses, BadOptions) {
   BacklashFitOptions options;
   options.alpha = 0.0;
   ExpectRefused(Fit(sweep, options),
-                "options.alpha = 0.000000 is outside the legal range");
+                "options.alpha = 0.000000 is outside the legal range (1/8, 8)");
+  options.alpha = 0.125;
+  ExpectRefused(Fit(sweep, options), "options.alpha = 0.125000");
   options = {};
   options.fit_alpha = true;
   options.alpha_min = 1.5;
   options.alpha_max = 1.2;
-  ExpectRefused(Fit(sweep, options), "0 < alpha_min < alpha_max < 8");
+  ExpectRefused(Fit(sweep, options), "1/8 < alpha_min < alpha_max < 8");
+  options.alpha_min = 0.1;
+  options.alpha_max = 1.2;
+  ExpectRefused(Fit(sweep, options), "1/8 < alpha_min < alpha_max < 8");
   options = {};
   options.min_engaged_fraction = 0.0;
   ExpectRefused(Fit(sweep, options), "min_engaged_fraction");
@@ -403,9 +418,13 @@ TEST(ToFirmwareConfig, RefusesLeftAboveRight) {
 }
 
 TEST(ToFirmwareConfig, RefusesAlphaOutsideTheLegalRange) {
-  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 9.0), "alpha = 9.000000", "(0, 8)");
-  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 0.0), "alpha = 0.000000", "(0, 8)");
-  ExpectConversionRefused(ConvergedFit(1.0, -1.0, -1.0), "alpha", "(0, 8)");
+  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 9.0), "alpha = 9.000000", "(1/8, 8)");
+  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 0.0), "alpha = 0.000000", "(1/8, 8)");
+  ExpectConversionRefused(ConvergedFit(1.0, -1.0, -1.0), "alpha", "(1/8, 8)");
+  // Below 1/8 the inverse model's 1/α would not fit the firmware's Q3.28 Scale.
+  ExpectConversionRefused(ConvergedFit(1.0, -1.0, 0.125), "alpha = 0.125000", "(1/8, 8)");
+  std::string why;
+  EXPECT_TRUE(ToFirmwareConfig(ConvergedFit(1.0, -1.0, 0.126), &why)) << why;
 }
 
 TEST(ToFirmwareConfig, RefusesNonFiniteAndUnconvergedFits) {
@@ -468,6 +487,78 @@ TEST(ToFirmwareConfig, AcceptsAGoodFitAndMatchesTheDoubleModel) {
   }
   // Rounding of θ_m, c and the α·(θ_m − c) product: a few Q7.24 LSBs (6e-8 rad each).
   EXPECT_LE(worst, 4.0 * Angle::Epsilon().ToDouble());
+}
+
+// ---------------------------------------------------------------------------------
+// The calibration file: every field range-checked, a refusal never an exception.
+
+nlohmann::json GoodCalibrationJson() {
+  return {{"c_right_deg", 1.1},
+          {"c_left_deg", -0.9},
+          {"alpha", 1.0},
+          {"sea_stiffness_Nm_per_rad", 0.63},
+          {"joint_zero_count", 123},
+          {"fit_rms_urad", 250},
+          {"fit_lag_us", 4000},
+          {"fitted_at_unix_s", 1700000000}};
+}
+
+TEST(CalibrationFile, RoundTripsThroughJson) {
+  std::string why;
+  const auto record = CalibrationFromJson(GoodCalibrationJson(), &why);
+  ASSERT_TRUE(record) << why;
+  EXPECT_EQ(record->joint_zero_count, 123);
+  EXPECT_EQ(record->fit_rms_urad, 250u);
+  EXPECT_EQ(record->fit_lag_us, 4000u);
+  EXPECT_EQ(record->fitted_at_unix_s, 1700000000u);
+  const auto again = CalibrationFromJson(CalibrationToJson(*record), &why);
+  ASSERT_TRUE(again) << why;
+  EXPECT_EQ(again->backlash.c_right, record->backlash.c_right);
+  EXPECT_EQ(again->backlash.c_left, record->backlash.c_left);
+  EXPECT_EQ(again->fitted_at_unix_s, record->fitted_at_unix_s);
+}
+
+TEST(CalibrationFile, FitFieldsAreOptional) {
+  nlohmann::json j = GoodCalibrationJson();
+  for (const char* key : {"fit_rms_urad", "fit_lag_us", "fitted_at_unix_s"}) j.erase(key);
+  std::string why;
+  const auto record = CalibrationFromJson(j, &why);
+  ASSERT_TRUE(record) << why;
+  EXPECT_EQ(record->fit_rms_urad, 0u);
+  EXPECT_EQ(record->fitted_at_unix_s, 0u);
+}
+
+TEST(CalibrationFile, IntegersOutOfTheirWireRangeAreRefused) {
+  struct Case {
+    const char* key;
+    nlohmann::json value;
+  };
+  const Case cases[] = {
+      {"fit_rms_urad", -5},  // would wrap to 4294967291
+      {"fit_rms_urad", 4294967296ull},
+      {"fit_lag_us", 1.5},
+      {"fit_lag_us", "4000"},  // a string: a type error inside nlohmann if not checked
+      {"fitted_at_unix_s", -1},
+      {"joint_zero_count", 16384},
+      {"joint_zero_count", nullptr},
+  };
+  for (const Case& c : cases) {
+    nlohmann::json j = GoodCalibrationJson();
+    j[c.key] = c.value;
+    std::string why;
+    std::optional<protocol::CalibrationRecord> record;
+    EXPECT_NO_THROW(record = CalibrationFromJson(j, &why)) << c.key << " = " << c.value;
+    EXPECT_FALSE(record) << c.key << " = " << c.value;
+    EXPECT_NE(why.find(std::string("'") + c.key + "' must be an integer in 0.."),
+              std::string::npos)
+        << why;
+  }
+  nlohmann::json largest = GoodCalibrationJson();
+  largest["fit_rms_urad"] = 4294967295u;
+  std::string why;
+  const auto record = CalibrationFromJson(largest, &why);
+  ASSERT_TRUE(record) << why;
+  EXPECT_EQ(record->fit_rms_urad, 4294967295u);
 }
 
 }  // namespace

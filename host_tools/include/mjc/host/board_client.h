@@ -2,7 +2,8 @@
 
 // One joint board seen from the host over a CanLink: commands with their answers,
 // trial configuration, and what the board reports (heartbeat, telemetry, window
-// summaries reassembled from their five frames, faults). Used by mjc trial and monitor.
+// summaries reassembled from their five frames, faults). Used by mjc trial, calibrate,
+// cal and monitor.
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -17,7 +18,8 @@ namespace mjc::host {
 struct BoardWindow {
   Motion motion = Motion::kFlexion;
   std::uint16_t repetition = 0;
-  bool eta_valid = false;
+  bool eta_valid =
+      false;  // false: the board could not form η (eta_percent means nothing)
   double eta_percent = 0;
   double loading_J = 0, unloading_J = 0, positive_J = 0, negative_J = 0;
   double peak_power_W = 0, peak_torque_Nm = 0;
@@ -29,10 +31,15 @@ struct BoardStatus {
   bool heard = false;
   protocol::BoardState state = protocol::BoardState::kIdle;
   bool calibrated = false;
-  bool bridge_enabled = false;
   Fault fault = Fault::kNone;
   std::uint32_t tick = 0;
   double motor_rad = 0, joint_rad = 0, torque_Nm = 0, power_W = 0, energy_J = 0;
+};
+
+// One TelemetryAngles frame: θ_m and θ_j in rad.
+struct AngleSample {
+  double motor_rad = 0;
+  double joint_rad = 0;
 };
 
 class BoardClient {
@@ -40,37 +47,71 @@ class BoardClient {
   // `link` must outlive the client; it is filtered to this node's frames.
   BoardClient(CanLink* link, std::uint8_t node);
 
-  // Sends a command and waits for its CommandResult: nullopt when the board does not
-  // answer within timeout_ms (then *why names the node).
+  // Sends a command and waits for its CommandResult: nullopt when it cannot be sent or
+  // the board does not answer within timeout_ms (then *why says which).
   std::optional<protocol::CommandOutcomeCode> Command(protocol::CommandCode code,
                                                       int timeout_ms, std::string* why);
-  bool SendTrialConfig(const protocol::TrialConfig& config, std::string* why);
+
+  // Sends one host message (TrialConfig, SweepConfig, …) to this node; false with the
+  // reason when the link cannot send it.
+  template <class M>
+  bool Send(const M& message, std::string* why) {
+    if (link_->Send(protocol::Encode(message, node_), why)) return true;
+    link_failed_ = true;
+    return false;
+  }
 
   // Reads a parameter: nullopt when the board does not answer, or answers with a status
   // other than kOk (then *why says which).
   std::optional<std::int32_t> ReadParam(protocol::ParamId id, int timeout_ms,
                                         std::string* why);
 
-  // Handles what arrives within timeout_ms; true if anything did.
-  bool Poll(int timeout_ms);
+  // Handles what arrives within timeout_ms. False only when the link failed (then *why
+  // says how); a quiet bus is not a failure.
+  bool Poll(int timeout_ms, std::string* why);
 
   // Windows completed since the last call.
   std::vector<BoardWindow> TakeWindows();
+
+  // Keeps every TelemetryAngles sample from now on (off by default, so a long-running
+  // client does not grow), until KeepAngles(false).
+  void KeepAngles(bool on) { keep_angles_ = on; }
+  // The samples kept since the last call, in arrival order.
+  std::vector<AngleSample> TakeAngles();
+
+  std::uint8_t node() const { return node_; }
+  // True once a send or receive failed on this side (the link is unusable): what tells
+  // a failed Command or ReadParam from a board that did not answer.
+  bool link_failed() const { return link_failed_; }
   const BoardStatus& status() const { return status_; }
+  // Frames of this node the codec refused.
   std::uint64_t malformed() const { return malformed_; }
+  // Windows dropped because a part was lost, malformed or out of order (each counted
+  // once); never half-assembled into TakeWindows.
+  std::uint64_t incomplete_windows() const { return incomplete_windows_; }
 
  private:
   void Handle(const protocol::CanFrame& frame);
+  bool AcceptWindowPart(int part);
 
   CanLink* link_;
   std::uint8_t node_;
   std::uint8_t sequence_ = 0;
   BoardStatus status_;
   BoardWindow partial_;
+  // The window part last seen, in the order the board sends them (0 header, 1 energy,
+  // 2 work, 3 peaks, 4 ticks); -1 between windows. broken_: the window in progress
+  // lost a part and is already counted in incomplete_windows_.
+  int last_part_ = -1;
+  bool broken_ = false;
   std::vector<BoardWindow> windows_;
+  bool keep_angles_ = false;
+  std::vector<AngleSample> angles_;
   std::optional<protocol::CommandResult> last_result_;
   std::optional<protocol::ParamValue> last_param_;
   std::uint64_t malformed_ = 0;
+  std::uint64_t incomplete_windows_ = 0;
+  bool link_failed_ = false;
 };
 
 }  // namespace mjc::host

@@ -41,11 +41,12 @@ struct BusLoad {
 };
 
 // The load of `boards` boards transmitting at `rates` (the board's own telemetry
-// schedule), plus the host's heartbeat and setpoint stream at `host_hz` per board.
+// schedule) and their window summaries, plus the host's heartbeat to each board.
+// Payload lengths are the message table's (protocol/messages.h).
 BusLoad ComputeBusLoad(const app::CanNodeConfig& rates, int boards,
-                       const BusTiming& timing, double setpoint_hz);
+                       const BusTiming& timing);
 
-// The highest rate of the 8-byte angle telemetry (the 1 kHz frame) that keeps `boards`
+// The highest rate of the angle telemetry (the 1 kHz frame) that keeps `boards`
 // boards' total load at or below `budget` with the other rates as given; 0 if even the
 // rest does not fit.
 double MaxTelemetryHz(app::CanNodeConfig rates, int boards, const BusTiming& timing,

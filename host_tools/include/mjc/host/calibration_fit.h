@@ -48,9 +48,9 @@ std::string_view ToString(BacklashFitStatus status);
 struct BacklashFitOptions {
   // Fit α = r_m / r_j as well; otherwise `alpha` is used as given.
   bool fit_alpha = false;
-  // The fixed α when fit_alpha is false. Legal (0, 8).
+  // The fixed α when fit_alpha is false. Legal (1/8, 8), the firmware's range.
   double alpha = 1.0;
-  // α's search range when fit_alpha is true. Legal 0 < alpha_min < alpha_max < 8. A fit
+  // α's search range when fit_alpha is true. Legal 1/8 < alpha_min < alpha_max < 8. A fit
   // that ends on either bound is refused (widen the range).
   double alpha_min = 0.5;
   double alpha_max = 2.0;
@@ -106,10 +106,6 @@ struct BacklashFit {
   double lag_s = 0;  // the fitted joint lag T (0 when not fitted)
   // RMS of θ_j − θ̃ over the whole record at the fitted values, rad.
   double rms_error_rad = std::numeric_limits<double>::quiet_NaN();
-  // Samples of the whole record that the modelled joint moved on the right edge
-  // (motor turning positive) and on the left edge (motor turning negative).
-  std::size_t right_engaged_samples = 0;
-  std::size_t left_engaged_samples = 0;
   // Stride of the local stage's decimation (1: every sample).
   std::size_t decimation = 1;
   // Cost evaluations over both stages, and wall-clock time of the whole call in ms.
@@ -130,7 +126,7 @@ BacklashFit FitBacklash(std::span<const double> motor_rad,
 // The fit as the firmware's fixed-point config (α as Scale Q3.28, c as Angle Q7.24,
 // rounded to nearest), checked with mjc::Validate. Refuses (nullopt, and the reason in
 // *why when why is not null) a fit that did not converge, non-finite values, α outside
-// (0, 8), an offset outside ±kMaxBacklashOffset, and c_l > c_r; the reason names the
+// (1/8, 8), an offset outside ±kMaxBacklashOffset, and c_l > c_r; the reason names the
 // field, its value and its legal range.
 std::optional<BacklashConfig> ToFirmwareConfig(const BacklashFit& fit, std::string* why);
 

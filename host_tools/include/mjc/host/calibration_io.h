@@ -1,5 +1,6 @@
 // Calibrations on the host: the JSON file `mjc calibrate` writes and `mjc cal` reads
-// (angles in degrees, for people), and the upload of a record to a board over ISO-TP.
+// (angles in degrees, for people), its upload to a board over ISO-TP, and the
+// calibration in force read back from a board.
 #pragma once
 
 #include <cstdint>
@@ -7,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "mjc/host/board_client.h"
 #include "mjc/protocol/calibration_record.h"
 
 namespace mjc::host {
@@ -14,29 +16,44 @@ namespace mjc::host {
 nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& record);
 
 // Reads and range-checks a calibration (the board's own checks, run here first): nullopt
-// with the reason naming the field when it is missing or out of range.
+// with the reason naming the field when it is missing, of the wrong type or out of
+// range. The fit fields (fit_rms_urad, fit_lag_us, fitted_at_unix_s) are optional
+// (absent: 0) but, when present, must be integers within their wire type's range.
+// Never throws.
 std::optional<protocol::CalibrationRecord> CalibrationFromJson(const nlohmann::json& json,
                                                                std::string* why);
 
+enum class UploadStatus : std::uint8_t {
+  kAnswered = 0,        // the board answered: see result and detail
+  kLinkFailed = 1,      // the ISO-TP socket could not be opened or the record not sent
+  kNoAnswer = 2,        // no answer within the timeout (absent or silent node)
+  kMalformedReply = 3,  // an answer that is not the 2-byte [result, detail]
+};
+
 struct UploadOutcome {
-  bool answered = false;  // false: no reply (the node is absent or silent)
+  UploadStatus status = UploadStatus::kNoAnswer;
   protocol::CalibrationResult result = protocol::CalibrationResult::kAccepted;
   std::uint8_t detail = 0;
   double elapsed_ms = 0;
 };
 
 // Uploads `record` to `node` on `iface` (ISO-TP on the node's 0x3E/0x3F ids) and waits
-// up to timeout_ms for the board's answer. nullopt with the reason when the interface
-// cannot be opened.
-std::optional<UploadOutcome> UploadCalibration(const std::string& iface, int node,
-                                               const protocol::CalibrationRecord& record,
-                                               int timeout_ms, std::string* why);
+// up to timeout_ms for the board's answer. Unless the status is kAnswered, *why says
+// what went wrong.
+UploadOutcome UploadCalibration(const std::string& iface, int node,
+                                const protocol::CalibrationRecord& record, int timeout_ms,
+                                std::string* why);
 
-// Reads the calibration in force back from a board (its read-only calibration
-// parameters); nullopt with the reason when it does not answer or is uncalibrated.
-std::optional<protocol::CalibrationRecord> DownloadCalibration(const std::string& iface,
-                                                               int node,
-                                                               std::string* why);
+struct BoardCalibration {
+  // c_r, c_l, α, stiffness and joint zero count in force. The fit fields are not
+  // readable over the bus and stay 0.
+  protocol::CalibrationRecord record;
+  bool calibrated = false;  // false: the board runs on its built-in values
+};
+
+// Reads the calibration in force from a board (its read-only calibration parameters,
+// 500 ms per read). nullopt with the first failure's reason.
+std::optional<BoardCalibration> ReadCalibration(BoardClient& board, std::string* why);
 
 // "accepted", "refused: bad CRC", … for messages.
 std::string DescribeCalibrationResult(protocol::CalibrationResult result,

@@ -3,8 +3,9 @@
 // InProcessBus connects links inside one process for unit tests. IsoTpLink moves
 // multi-frame payloads (calibration records) through the kernel's CAN_ISOTP.
 //
-// Errors never throw: Open returns nullptr and Send/Receive return false or nullopt,
-// each with a reason in `why` naming the interface and the system's message.
+// Errors never throw: Open returns nullptr, Send returns false and Receive a result
+// that says whether it timed out or failed, each with a reason in `why` naming the
+// interface and the system's message.
 #pragma once
 
 #include <condition_variable>
@@ -23,7 +24,29 @@ namespace mjc::host {
 
 struct ReceivedFrame {
   protocol::CanFrame frame;
-  double timestamp_s = 0;  // kernel receive time (SO_TIMESTAMP), CLOCK_REALTIME seconds
+  // Kernel receive time (SO_TIMESTAMP): CLOCK_REALTIME microseconds since the epoch,
+  // exactly as the kernel reports it (a candump log prints it digit for digit).
+  std::int64_t timestamp_us = 0;
+  // The same in seconds, for arithmetic only: a double of today's Unix time resolves
+  // ~0.2 µs, so it does not convert back to the exact microsecond.
+  double timestamp_s = 0;
+};
+
+enum class ReceiveStatus : std::uint8_t {
+  kFrame = 0,    // a frame arrived
+  kTimeout = 1,  // none within the timeout
+  kError = 2,    // the socket failed (the reason is in `why`)
+};
+
+// What Receive returns: a frame, or why there is none. Tests true only for a frame; *
+// and -> reach the frame (a default one unless status is kFrame).
+struct ReceiveResult {
+  ReceiveStatus status = ReceiveStatus::kTimeout;
+  ReceivedFrame received;
+
+  explicit operator bool() const { return status == ReceiveStatus::kFrame; }
+  const ReceivedFrame& operator*() const { return received; }
+  const ReceivedFrame* operator->() const { return &received; }
 };
 
 struct LinkStats {
@@ -31,7 +54,7 @@ struct LinkStats {
   std::uint64_t received = 0;
   std::uint64_t error_frames = 0;  // CAN error frames seen (controller, bus errors)
   std::uint64_t bus_off = 0;       // of those, bus-off reports
-  std::uint64_t tx_retries = 0;    // sends retried after ENOBUFS / EAGAIN
+  std::uint64_t tx_retries = 0;    // waits for room after ENOBUFS / EAGAIN
   std::uint64_t tx_failed = 0;     // sends given up on
   std::uint64_t rx_dropped = 0;    // frames the kernel dropped for this socket
                                    // (receive buffer full; SO_RXQ_OVFL)
@@ -46,15 +69,16 @@ class CanLink {
  public:
   virtual ~CanLink() = default;
 
-  // Queues one frame for transmission. Waits (bounded) when the interface's queue is
+  // Queues one frame for transmission. Waits up to 100 ms when the interface's queue is
   // full; false with the reason when it stays full or the interface is down.
   bool Send(const protocol::CanFrame& frame, std::string* why) {
     return DoSend(frame, why);
   }
 
   // The next data frame that passes the filters, waiting up to timeout_ms (0: only what
-  // is already there); nullopt on timeout or error (then *why says which, when given).
-  std::optional<ReceivedFrame> Receive(int timeout_ms, std::string* why = nullptr) {
+  // is already there). On kError *why (when given) says what failed; the link is then
+  // unusable and the caller should stop.
+  ReceiveResult Receive(int timeout_ms, std::string* why = nullptr) {
     return DoReceive(timeout_ms, why);
   }
 
@@ -64,16 +88,13 @@ class CanLink {
   }
 
   const LinkStats& stats() const { return stats_; }
-  // True after a bus-off error frame, until the next successful receive of data.
-  bool bus_off() const { return bus_off_; }
 
  protected:
   LinkStats stats_;
-  bool bus_off_ = false;
 
  private:
   virtual bool DoSend(const protocol::CanFrame& frame, std::string* why) = 0;
-  virtual std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string* why) = 0;
+  virtual ReceiveResult DoReceive(int timeout_ms, std::string* why) = 0;
   virtual bool DoSetFilters(std::span<const IdFilter> filters, std::string* why) = 0;
 };
 
@@ -88,14 +109,11 @@ class SocketCanLink final : public CanLink {
   SocketCanLink(const SocketCanLink&) = delete;
   SocketCanLink& operator=(const SocketCanLink&) = delete;
 
-  // Also receive the frames this socket sends (off by default, as on the kernel).
-  bool ReceiveOwn(bool on, std::string* why);
-
  private:
   SocketCanLink(int fd, std::string interface)
       : fd_(fd), interface_(std::move(interface)) {}
   bool DoSend(const protocol::CanFrame& frame, std::string* why) override;
-  std::optional<ReceivedFrame> DoReceive(int timeout_ms, std::string* why) override;
+  ReceiveResult DoReceive(int timeout_ms, std::string* why) override;
   bool DoSetFilters(std::span<const IdFilter> filters, std::string* why) override;
 
   int fd_;

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace mjc::host {
@@ -33,15 +34,20 @@ class CsvTable {
   static std::string Number(double v);
   // Writes the table; throws std::runtime_error naming the path on failure.
   void Write(const std::filesystem::path& path) const;
-  const std::vector<std::vector<std::string>>& rows() const { return rows_; }
 
  private:
   std::vector<std::string> columns_;
   std::vector<std::vector<std::string>> rows_;
 };
 
-// Runs gnuplot on `script` (written next to its outputs so it can be re-run by hand).
-// Returns false with a reason when gnuplot is missing or fails.
+// Writes `text` as the whole of the file at `path` (created or replaced). Throws
+// std::runtime_error naming the path and the system's reason when it cannot be opened,
+// written or closed, so a full disk or a missing folder is never a silent loss.
+void WriteFile(const std::filesystem::path& path, std::string_view text);
+
+// Runs gnuplot on `script` (written next to its outputs so it can be re-run by hand);
+// gnuplot's own messages go to stderr. Returns false with a reason when gnuplot is
+// missing or fails.
 bool RunGnuplot(const std::filesystem::path& script, std::string* why);
 
 }  // namespace mjc::host

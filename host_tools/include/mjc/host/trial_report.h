@@ -13,22 +13,32 @@ namespace mjc::host {
 
 struct TrialWindows {
   double amplitude_deg = 0;
+  std::uint16_t repetitions = 0;     // of the trial (its middle three are analysed)
   std::vector<BoardWindow> windows;  // all of the trial's windows
 };
 
-// Markdown: η per trial (repeatability) or work per amplitude (amplitude protocol).
-std::string TrialTables(const std::vector<TrialWindows>& trials,
-                        std::uint16_t repetitions, bool repeatability);
+// Markdown: η per trial (repeatability) or work per amplitude (amplitude protocol), of
+// each trial's middle three flexions. Windows the board marked η-invalid count in the
+// work figures but not in η's; a closing line says how many were left out.
+std::string TrialTables(const std::vector<TrialWindows>& trials, bool repeatability);
 
-// Writes windows.csv (every window) into `dir`.
+// True when every trial ran at the same amplitude (a repeatability run, or an amplitude
+// run of one amplitude).
+bool SameAmplitude(const std::vector<TrialWindows>& trials);
+
+// Writes windows.csv (every window) into `dir`; throws std::runtime_error naming the
+// file when it cannot be written.
 void WriteWindowsCsv(const std::vector<TrialWindows>& trials,
                      const std::filesystem::path& dir);
 
-// Reads a windows.csv back; nullopt with the reason when it is missing or malformed.
+// Reads a windows.csv back, each trial's repetitions taken as its largest repetition
+// + 1; nullopt with the reason when it is missing or malformed.
 std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::path& dir,
                                                         std::string* why);
 
-// eta.png in `dir` (gnuplot); false with the reason when gnuplot fails.
-bool PlotTrials(const std::filesystem::path& dir, std::string* why);
+// eta.png in `dir` (gnuplot): η of every valid flexion window against the trial number
+// (repeatability) or the amplitude. False with the reason when gnuplot fails; throws
+// std::runtime_error when its script cannot be written.
+bool PlotTrials(const std::filesystem::path& dir, bool repeatability, std::string* why);
 
 }  // namespace mjc::host

@@ -10,10 +10,20 @@
 
 namespace mjc::host {
 
+// How a trial ended.
+enum class TrialEnd : std::uint8_t {
+  kCompleted = 0,
+  kLinkFailed = 1,  // the host could not send or receive
+  kNoAnswer = 2,    // the board did not answer the start, or did not finish in time
+  kRefused = 3,     // the board refused the start
+  kFaulted = 4,     // the board faulted during the trial
+};
+
 struct BoardTrial {
   std::vector<BoardWindow> windows;
-  bool completed = false;
-  std::string error;  // why it did not complete (refused, silent node, fault, timeout)
+  TrialEnd end = TrialEnd::kNoAnswer;
+  bool completed = false;  // end == kCompleted
+  std::string error;       // why it did not complete
 };
 
 // `progress` gets a line per completed window. timeout_s bounds the wall time.
