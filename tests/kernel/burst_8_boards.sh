@@ -7,26 +7,8 @@ set -u
 mjc=$1
 work=$(mktemp -d)
 
-# The logger is ready once the CAN core has registered its receiver on vcan0 (as in
-# smoke.sh; frames sent before would be missed). Pure bash: forks are slow under TCG.
-count_receivers() {
-  local f line
-  receivers=0
-  for f in /proc/net/can/rcvlist_*; do
-    while IFS= read -r line; do
-      [[ $line =~ ^\ +vcan0\ +[0-9A-Fa-f] ]] && receivers=$((receivers + 1))
-    done <"$f"
-  done
-}
-wait_receivers() {  # COUNT: wait (at most 10 s) until at least COUNT are registered
-  local i
-  for ((i = 0; i < 200; i++)); do
-    count_receivers
-    ((receivers >= $1)) && return 0
-    sleep 0.05
-  done
-  return 1
-}
+# The logger is ready once the CAN core has registered its receiver on vcan0.
+. "$(dirname "$0")/receivers.sh"
 
 count_receivers
 base=$receivers

@@ -24,27 +24,9 @@ check() {  # check <description> <command...>
   fi
 }
 
-# Readiness, as in smoke.sh: a listener started in the background is ready once the CAN
-# core has registered its receiver on vcan0 (under TCG that takes ~0.1 s; frames sent
-# before are missed). Pure bash: every fork costs ~50 ms under TCG.
-count_receivers() {
-  local f line
-  receivers=0
-  for f in /proc/net/can/rcvlist_*; do
-    while IFS= read -r line; do
-      [[ $line =~ ^\ +vcan0\ +[0-9A-Fa-f] ]] && receivers=$((receivers + 1))
-    done <"$f"
-  done
-}
-wait_receivers() {  # COUNT: wait (at most 10 s) until at least COUNT are registered
-  local i
-  for ((i = 0; i < 200; i++)); do
-    count_receivers
-    ((receivers >= $1)) && return 0
-    sleep 0.05
-  done
-  return 1
-}
+# Readiness: a listener started in the background is ready once the CAN core has
+# registered its receiver on vcan0.
+. "$(dirname "$0")/receivers.sh"
 # A simulated board is on the bus once it prints "mjc sim: node N on vcan0" (after its
 # socket, plant and flash are set up).
 wait_sim() {  # ERRFILE NODE: wait (at most 20 s)
