@@ -69,7 +69,9 @@ void AddCalibrate(CLI::App& app) {
   cmd->callback([] {
     CheckWritable(out_path);
     auto link = OpenLink(iface);
-    host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
+    // Heartbeats flow while the sweep runs: if this tool dies, the board stops it.
+    host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
+                            host::HostHeartbeats::kSend);
     const std::string who = "node " + std::to_string(node);
     std::string why;
 

@@ -1,7 +1,9 @@
 // mjc monitor: live values of one or more boards (state, calibration, fault, angles,
 // torque, power, energy), a line per node every interval, and a line for the bus once
 // it has reported errors (error frames, bus-off). A node that has not sent a heartbeat
-// for two seconds is reported silent; the exit status is then Exit::kNoAnswer.
+// for two seconds is reported silent; the exit status is then Exit::kNoAnswer. While it
+// runs it supervises: each node gets the host's heartbeat, so a motion still running
+// when the monitor stops or dies is stopped by the board (kHostHeartbeatLost).
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -32,7 +34,8 @@ const char* StateName(protocol::BoardState s) {
 }  // namespace
 
 void AddMonitor(CLI::App& app) {
-  auto* cmd = app.add_subcommand("monitor", "Live values of boards on the bus");
+  auto* cmd = app.add_subcommand(
+      "monitor", "Live values of boards on the bus; supervises them (host heartbeat)");
   static std::string iface;
   static std::vector<int> nodes = {1};
   static double seconds = 0;
@@ -51,7 +54,8 @@ void AddMonitor(CLI::App& app) {
     for (int node : nodes) {
       links.push_back(OpenLink(iface));
       boards.push_back(std::make_unique<host::BoardClient>(
-          links.back().get(), static_cast<std::uint8_t>(node)));
+          links.back().get(), static_cast<std::uint8_t>(node),
+          host::HostHeartbeats::kSend));
     }
     const std::atomic<bool>& stop = StopOnSignals();
     const auto start = std::chrono::steady_clock::now();

@@ -2,8 +2,10 @@
 // application and CAN node run against the plant model at the board's tick rate, paced
 // to wall time (or --speed times faster), so the other mjc commands, can-utils and any
 // CAN tool see a board on the bus.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <numeric>
 #include <thread>
@@ -63,6 +65,13 @@ void AddSim(CLI::App& app) {
     }
     app::CanNodeConfig node_config;
     node_config.node = static_cast<std::uint8_t>(node);
+    // A host's heartbeats come every 100 ms of wall time, `speed` times as much board
+    // time: the board's supervision timeout scales with it, so it still means 300 ms of
+    // wall time, and is off at speed 0, where wall time means nothing to the board.
+    node_config.host_timeout_ms =
+        speed == 0 ? std::uint16_t{0}
+                   : static_cast<std::uint16_t>(std::clamp(
+                         std::lround(node_config.host_timeout_ms * speed), 1L, 60000L));
     app::CanNode can(&board.app(), node_config, &store);
     const std::atomic<bool>& stop = StopOnSignals();
     std::fprintf(

@@ -76,7 +76,10 @@ void AddTrial(CLI::App& app) {
     std::vector<host::TrialWindows> runs;
     host::WriteWindowsCsv(runs, out_dir);
     auto link = OpenLink(iface);
-    host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
+    // Heartbeats flow while a trial runs: if this tool dies, the board stops it. The
+    // --pause prompt waits with the board at rest, where their absence is harmless.
+    host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
+                            host::HostHeartbeats::kSend);
     const bool repeatability = protocol_name == "repeatability";
     const std::vector<double> plan =
         repeatability

@@ -1,12 +1,16 @@
 #include "mjc/host/board_client.h"
 
+#include <algorithm>
 #include <chrono>
+#include <utility>
 
 namespace mjc::host {
 
 using namespace mjc::protocol;
 
-BoardClient::BoardClient(CanLink* link, std::uint8_t node) : link_(link), node_(node) {
+BoardClient::BoardClient(CanLink* link, std::uint8_t node, HostHeartbeats heartbeats,
+                         Clock now)
+    : link_(link), node_(node), heartbeats_(heartbeats), now_(std::move(now)) {
   // Only a saving: Handle checks the node itself, so a link that cannot filter works.
   const IdFilter only_node{node, 0x00F};
   std::string why;
@@ -18,9 +22,8 @@ std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int tim
   const std::uint8_t seq = ++sequence_;
   last_result_.reset();
   if (!Send(protocol::Command{code, seq}, why)) return std::nullopt;
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-  while (std::chrono::steady_clock::now() < deadline) {
+  const auto deadline = now_() + std::chrono::milliseconds(timeout_ms);
+  while (now_() < deadline) {
     if (!Poll(10, why)) return std::nullopt;
     if (last_result_ && last_result_->sequence == seq && last_result_->code == code) {
       return last_result_->outcome;
@@ -35,9 +38,8 @@ std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
                                                    std::string* why) {
   last_param_.reset();
   if (!Send(ParamRead{id}, why)) return std::nullopt;
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-  while (std::chrono::steady_clock::now() < deadline) {
+  const auto deadline = now_() + std::chrono::milliseconds(timeout_ms);
+  while (now_() < deadline) {
     if (!Poll(10, why)) return std::nullopt;
     if (last_param_ && last_param_->id == id) {
       if (last_param_->status != ParamStatus::kOk) {
@@ -55,10 +57,35 @@ std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
 }
 
 bool BoardClient::Poll(int timeout_ms, std::string* why) {
-  ReceiveResult r = link_->Receive(timeout_ms, why);
-  for (; r; r = link_->Receive(0, why)) Handle(r->frame);
-  if (r.status == ReceiveStatus::kError) link_failed_ = true;
-  return !link_failed_;
+  using std::chrono::milliseconds;
+  const auto deadline = now_() + milliseconds(timeout_ms);
+  for (;;) {
+    if (!Beat(why)) return false;
+    // Wait no longer than the next heartbeat: a long wait is a series of short ones.
+    auto until = deadline;
+    if (heartbeats_ == HostHeartbeats::kSend) until = std::min(until, next_heartbeat_);
+    const auto wait = std::max(std::chrono::ceil<milliseconds>(until - now_()).count(),
+                               milliseconds::rep{0});
+    ReceiveResult r = link_->Receive(static_cast<int>(wait), why);
+    const bool arrived = static_cast<bool>(r);
+    for (; r; r = link_->Receive(0, why)) Handle(r->frame);
+    if (r.status == ReceiveStatus::kError) {
+      link_failed_ = true;
+      return false;
+    }
+    if (arrived || now_() >= deadline) return Beat(why);
+  }
+}
+
+bool BoardClient::Beat(std::string* why) {
+  if (heartbeats_ != HostHeartbeats::kSend) return true;
+  const auto now = now_();
+  if (now < next_heartbeat_) return true;
+  // Keep the cadence when a poll ran a little late; start afresh after a pause.
+  next_heartbeat_ = now - next_heartbeat_ < kHostHeartbeatPeriod
+                        ? next_heartbeat_ + kHostHeartbeatPeriod
+                        : now + kHostHeartbeatPeriod;
+  return Send(HostHeartbeat{heartbeat_sequence_++}, why);
 }
 
 std::vector<BoardWindow> BoardClient::TakeWindows() {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "mjc/host/board_client.h"
 #include "mjc/protocol/messages.h"
 
 namespace mjc::host {
@@ -27,7 +28,7 @@ using namespace mjc::protocol;
 // extension) per cycle, at most 2 Hz cycles in the paper's protocols.
 constexpr double kWindowsHz = 4.0;
 // The host's heartbeat to each board, Hz.
-constexpr double kHostHeartbeatHz = 10.0;
+constexpr double kHostHeartbeatHz = 1000.0 / kHostHeartbeatPeriod.count();
 
 }  // namespace
 

@@ -176,6 +176,33 @@ check "and reports it calibrated" \
 kill "$sim3"
 wait "$sim3" 2>/dev/null
 
+# Host supervision: mjc trial sends heartbeats (the trial above completed with them, on a
+# board whose timeout mjc sim scales with --speed); when its host dies mid-trial the
+# board stops the motion with kHostHeartbeatLost (302, 0x012E), seen passively on the
+# Fault frame (0x012): a listener that sent heartbeats itself would keep the board going.
+"$mjc" trial --iface vcan0 --node 2 --protocol amplitude --amplitudes 15 --reps 20 \
+  --frequency-hz 0.5 --rest-s 0.2 --out "$work/orphan" 2>"$work/orphan.err" &
+orphan=$!
+trial_running() {  # wait (at most 20 s) until the trial's first window has arrived
+  local i
+  for ((i = 0; i < 400; i++)); do
+    grep -q 'repetition 1/20' "$work/orphan.err" 2>/dev/null && return 0
+    sleep 0.05
+  done
+  return 1
+}
+check "a long trial runs on node 2" trial_running
+count_receivers
+base=$receivers
+candump -n 1 -T 5000 vcan0,012:7FF >"$work/fault.txt" 2>&1 &
+dumper=$!
+wait_receivers $((base + 1))
+kill -KILL "$orphan"
+wait "$orphan" 2>/dev/null
+wait "$dumper"
+check "the board stops the trial of a host that died (fault 302)" \
+  grep -q '012 *\[7\] *2E 01' "$work/fault.txt"
+
 kill "$sim" "$sim2" 2>/dev/null
 wait "$sim" "$sim2" 2>/dev/null
 check "mjc sim accounted for every frame (no malformed)" grep -q 'malformed 0' "$work/sim.err"

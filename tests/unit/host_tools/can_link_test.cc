@@ -14,7 +14,9 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <span>
 #include <sstream>
+#include <utility>
 
 #include "mjc/host/board_client.h"
 #include "mjc/host/trial_report.h"
@@ -217,6 +219,96 @@ TEST_F(WindowAssembly, MalformedPartCountsAsLost) {
   EXPECT_TRUE(Received().empty());
   EXPECT_EQ(client_.malformed(), 1u);
   EXPECT_EQ(client_.incomplete_windows(), 1u);
+}
+
+// ---------------------------------------------------------------------------------
+// The host heartbeat, on a link that runs a simulated clock: a receive that waits
+// advances it by its whole timeout (the bus is quiet), and every sent frame is kept
+// with the time it was sent.
+
+class SimulatedLink final : public CanLink {
+ public:
+  using Time = std::chrono::steady_clock::time_point;
+  Time now{};
+  std::vector<std::pair<Time, protocol::CanFrame>> sent;
+
+ private:
+  bool DoSend(const protocol::CanFrame& frame, std::string*) override {
+    sent.emplace_back(now, frame);
+    return true;
+  }
+  ReceiveResult DoReceive(int timeout_ms, std::string*) override {
+    now += std::chrono::milliseconds(timeout_ms);
+    return {ReceiveStatus::kTimeout, {}};
+  }
+  bool DoSetFilters(std::span<const IdFilter>, std::string*) override { return true; }
+};
+
+class HostHeartbeatCadence : public ::testing::Test {
+ protected:
+  // The heartbeats sent so far: their times in ms since the start and sequences.
+  std::vector<std::pair<long, int>> Heartbeats() const {
+    std::vector<std::pair<long, int>> out;
+    for (const auto& [time, frame] : link_.sent) {
+      protocol::HostHeartbeat h;
+      if (protocol::Decode(frame, &h) != protocol::DecodeError::kOk) continue;
+      EXPECT_EQ(protocol::NodeOf(frame.id), kNode);
+      const auto ms =
+          std::chrono::duration_cast<std::chrono::milliseconds>(time - start_).count();
+      out.emplace_back(static_cast<long>(ms), h.sequence);
+    }
+    return out;
+  }
+
+  SimulatedLink link_;
+  const SimulatedLink::Time start_ = link_.now;
+  BoardClient client_{&link_, kNode, HostHeartbeats::kSend, [this] { return link_.now; }};
+  std::string why_;
+};
+
+TEST_F(HostHeartbeatCadence, EveryPeriodThroughOneLongPoll) {
+  ASSERT_TRUE(client_.Poll(1000, &why_)) << why_;
+  const auto beats = Heartbeats();
+  // 0, 100, …, 1000 ms: the whole second, ends included, with consecutive sequences.
+  ASSERT_EQ(beats.size(), 11u);
+  for (std::size_t i = 0; i < beats.size(); ++i) {
+    EXPECT_EQ(beats[i].first, 100 * static_cast<long>(i)) << "heartbeat " << i;
+    EXPECT_EQ(beats[i].second, static_cast<int>(i)) << "heartbeat " << i;
+  }
+  EXPECT_EQ(link_.now - start_, std::chrono::milliseconds(1000));  // waited it all
+}
+
+TEST_F(HostHeartbeatCadence, KeepsItsCadenceAcrossShortPolls) {
+  // A caller polling 30 ms at a time (as mjc monitor does in 5 ms steps): the
+  // heartbeat goes out at the first poll after it is due, and the next one is due a
+  // period after the last was, not after it went out, so the average stays 100 ms.
+  for (int i = 0; i < 40; ++i) ASSERT_TRUE(client_.Poll(30, &why_)) << why_;
+  const auto beats = Heartbeats();
+  ASSERT_EQ(beats.size(), 13u);  // due at 0, 100, …, 1200: 1200 ms polled
+  for (std::size_t i = 1; i < beats.size(); ++i) {
+    EXPECT_LE(beats[i].first - beats[i - 1].first, 100 + 30) << "heartbeat " << i;
+    EXPECT_GE(beats[i].first, 100 * static_cast<long>(i)) << "heartbeat " << i;
+    EXPECT_LT(beats[i].first, 100 * static_cast<long>(i) + 30) << "heartbeat " << i;
+  }
+}
+
+TEST_F(HostHeartbeatCadence, FlowWhileACommandWaitsForItsAnswer) {
+  // No answer: the command waits out its 1000 ms in 10 ms polls, heartbeats on time.
+  EXPECT_FALSE(client_.Command(protocol::CommandCode::kStop, 1000, &why_));
+  EXPECT_NE(why_.find("did not answer"), std::string::npos) << why_;
+  EXPECT_FALSE(client_.link_failed());
+  const auto beats = Heartbeats();
+  ASSERT_GE(beats.size(), 10u);
+  for (std::size_t i = 0; i < beats.size(); ++i) {
+    EXPECT_EQ(beats[i].first, 100 * static_cast<long>(i)) << "heartbeat " << i;
+  }
+}
+
+TEST_F(HostHeartbeatCadence, NoneWhenOff) {
+  BoardClient quiet(&link_, kNode, HostHeartbeats::kOff, [this] { return link_.now; });
+  ASSERT_TRUE(quiet.Poll(1000, &why_)) << why_;
+  EXPECT_TRUE(Heartbeats().empty());
+  EXPECT_EQ(link_.now - start_, std::chrono::milliseconds(1000));
 }
 
 // ---------------------------------------------------------------------------------

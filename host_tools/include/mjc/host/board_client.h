@@ -2,9 +2,12 @@
 
 // One joint board seen from the host over a CanLink: commands with their answers,
 // trial configuration, and what the board reports (heartbeat, telemetry, window
-// summaries reassembled from their five frames, faults). Used by mjc trial, calibrate,
+// summaries reassembled from their five frames, faults), and the host's heartbeat that
+// lets the board stop a motion when this host goes away. Used by mjc trial, calibrate,
 // cal and monitor.
+#include <chrono>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,10 +45,30 @@ struct AngleSample {
   double joint_rad = 0;
 };
 
+// The host's heartbeat period. A board that has heard one stops a running motion
+// (kHostHeartbeatLost) when none arrives for its host_timeout_ms, 300 ms by default:
+// two heartbeats may be lost.
+inline constexpr std::chrono::milliseconds kHostHeartbeatPeriod{100};
+
+enum class HostHeartbeats : std::uint8_t {
+  kOff = 0,   // the board is not supervised by this client
+  kSend = 1,  // a HostHeartbeat every kHostHeartbeatPeriod while the client polls
+};
+
 class BoardClient {
  public:
-  // `link` must outlive the client; it is filtered to this node's frames.
-  BoardClient(CanLink* link, std::uint8_t node);
+  using Clock = std::function<std::chrono::steady_clock::time_point()>;
+
+  // `link` must outlive the client; it is filtered to this node's frames. With
+  // HostHeartbeats::kSend every wait of the client (Poll, Command, ReadParam) sends
+  // the heartbeat on time, however long it is; between calls nothing is sent, so a
+  // caller that stops polling (a prompt, a long computation) must leave the board at
+  // rest first. Off by default: a board simulated faster than real time would count a
+  // wall-clock cadence as lost heartbeats. `now` is the clock of every deadline and of
+  // the cadence (tests give a simulated one).
+  BoardClient(CanLink* link, std::uint8_t node,
+              HostHeartbeats heartbeats = HostHeartbeats::kOff,
+              Clock now = &std::chrono::steady_clock::now);
 
   // Sends a command and waits for its CommandResult: nullopt when it cannot be sent or
   // the board does not answer within timeout_ms (then *why says which).
@@ -66,8 +89,9 @@ class BoardClient {
   std::optional<std::int32_t> ReadParam(protocol::ParamId id, int timeout_ms,
                                         std::string* why);
 
-  // Handles what arrives within timeout_ms. False only when the link failed (then *why
-  // says how); a quiet bus is not a failure.
+  // Handles what arrives within timeout_ms: returns once something has, or at the
+  // timeout, sending heartbeats meanwhile when they are on. False only when the link
+  // failed (then *why says how); a quiet bus is not a failure.
   bool Poll(int timeout_ms, std::string* why);
 
   // Windows completed since the last call.
@@ -93,9 +117,16 @@ class BoardClient {
  private:
   void Handle(const protocol::CanFrame& frame);
   bool AcceptWindowPart(int part);
+  // Sends the heartbeat when it is due; false when the link failed.
+  bool Beat(std::string* why);
 
   CanLink* link_;
   std::uint8_t node_;
+  HostHeartbeats heartbeats_;
+  Clock now_;
+  // When the next heartbeat is due (the epoch: at the first poll) and its sequence.
+  std::chrono::steady_clock::time_point next_heartbeat_{};
+  std::uint8_t heartbeat_sequence_ = 0;
   std::uint8_t sequence_ = 0;
   BoardStatus status_;
   BoardWindow partial_;
