@@ -57,9 +57,10 @@ inline Exit NoAnswer(const host::BoardClient& board) {
 }
 
 // --iface, defaulting to vcan0.
-inline void AddIfaceOption(CLI::App* cmd, std::string* iface) {
+inline CLI::Option* AddIfaceOption(CLI::App* cmd, std::string* iface,
+                                   const char* help = "CAN interface") {
   *iface = "vcan0";
-  cmd->add_option("--iface", *iface, "CAN interface")->capture_default_str();
+  return cmd->add_option("--iface", *iface, help)->capture_default_str();
 }
 
 // --node into an int (one node) or a std::vector<int> (several), checked against the

@@ -195,6 +195,7 @@ ReceiveResult SocketCanLink::DoReceive(int timeout_ms, std::string* why) {
     r.frame.id = raw.can_id & CAN_SFF_MASK;
     r.frame.length = raw.len;
     r.frame.fd = n == static_cast<ssize_t>(CANFD_MTU);
+    if (r.frame.fd) r.flags = raw.flags;
     std::memcpy(r.frame.data.data(), raw.data, std::min<std::size_t>(raw.len, 64));
     for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr;
          c = CMSG_NXTHDR(&message, c)) {

@@ -53,14 +53,20 @@ sim=$!
 # A second board, with a subject's hand donned, for the trial.
 "$mjc" sim --iface vcan0 --node 2 --subject subject1 --speed 4 --seconds 120 2>"$work/sim2.err" &
 sim2=$!
+boards_up() { wait_sim "$work/sim.err" 1 && wait_sim "$work/sim2.err" 2; }
+check "the boards come up" boards_up
+# can-utils' own recording (one receiver), for mjc log --from to read; then mjc log
+# (two: data and error frames), each counted once the ones before are in.
+count_receivers
+base=$receivers
+candump -L vcan0 >"$work/candump.log" 2>"$work/candump.err" &
+dumplog=$!
+check "candump listens" wait_receivers $((base + 1))
 count_receivers
 base=$receivers
 "$mjc" log --iface vcan0 --seconds 4 --out "$work/bus.log" 2>"$work/log.err" &
 logger=$!
-all_up() {
-  wait_sim "$work/sim.err" 1 && wait_sim "$work/sim2.err" 2 && wait_receivers $((base + 1))
-}
-check "the boards and the logger come up" all_up
+check "mjc log listens" wait_receivers $((base + 2))
 
 # Node 1 first holds a calibration with a distinctive SEA stiffness: calibrate must keep
 # it (it replaces only the backlash), not reset it to a default.
@@ -117,6 +123,23 @@ check "every window of the trial reached the host (3 flexions, 3 extensions)" \
 wait "$logger"
 check "mjc log wrote candump lines" grep -qE '^\([0-9]+\.[0-9]{6}\) vcan0 [0-9A-F]{3}#' "$work/bus.log"
 check "can-utils log2asc reads mjc's log" sh -c "log2asc -I '$work/bus.log' -O '$work/bus.asc' vcan0 && grep -q ' Rx ' '$work/bus.asc'"
+kill -INT "$dumplog"
+wait "$dumplog"
+check "candump recorded the bus" test -s "$work/candump.log"
+check "mjc log --from reads candump's log back line for line" \
+  sh -c "'$mjc' log --from '$work/candump.log' >'$work/candump.again' 2>/dev/null && cmp '$work/candump.log' '$work/candump.again'"
+lines=$(wc -l <"$work/bus.log")
+check "mjc log --from decodes every line of mjc's own log to CSV" \
+  sh -c "'$mjc' log --from '$work/bus.log' --format csv --out '$work/bus.csv' 2>'$work/from.err' && grep -q '^mjc log: $lines frames from' '$work/from.err' && grep -q ',TelemetryAngles,motor_angle_rad,' '$work/bus.csv'"
+# A damaged copy: line 3 cut short. The other lines are still decoded; the command
+# fails (exit 1) naming the first bad line.
+{ head -n 2 "$work/bus.log"; head -n 3 "$work/bus.log" | tail -n 1 | cut -c 1-25; tail -n +4 "$work/bus.log"; } \
+  >"$work/damaged.log"
+"$mjc" log --from "$work/damaged.log" --out "$work/damaged.out" 2>"$work/damaged.err"
+status=$?
+echo "exit $status: $(cat "$work/damaged.err")"
+check "a malformed log line: exit 1, named, the rest decoded" \
+  sh -c "test $status -eq 1 && grep -q '1 malformed line(s) skipped.*line 3: ' '$work/damaged.err' && test \$(wc -l <'$work/damaged.out') -eq $((lines - 1))"
 
 # cansend a stop command (node 1, sequence 0x2A): the board answers on 0x041.
 count_receivers

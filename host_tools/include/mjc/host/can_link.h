@@ -30,6 +30,8 @@ struct ReceivedFrame {
   // The same in seconds, for arithmetic only: a double of today's Unix time resolves
   // ~0.2 µs, so it does not convert back to the exact microsecond.
   double timestamp_s = 0;
+  // CAN FD flags as received (CANFD_BRS, CANFD_ESI, CANFD_FDF); 0 for a classical frame.
+  std::uint8_t flags = 0;
 };
 
 enum class ReceiveStatus : std::uint8_t {
