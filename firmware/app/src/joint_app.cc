@@ -99,9 +99,13 @@ CommandOutcome JointApp::ClearFaults(RequestTag tag) {
 }
 
 void JointApp::ISR_FollowHost() {
-  const auto raised =
-      static_cast<Fault>(raised_fault_.exchange(0, std::memory_order_acquire));
-  if (raised != Fault::kNone) control_.RaiseExternalFault(raised);
+  // A plain load on the usual tick; the exclusive-access exchange only when a fault
+  // is pending (a raise between the two is then taken with it, never lost).
+  if (raised_fault_.load(std::memory_order_relaxed) != 0) {
+    const auto raised =
+        static_cast<Fault>(raised_fault_.exchange(0, std::memory_order_acquire));
+    control_.RaiseExternalFault(raised);
+  }
   if (control_.trajectory().mode() == TrajectoryMode::kStream) {
     (void)control_.trajectory().SetStreamTarget(
         Angle::FromRaw(stream_target_.load(std::memory_order_relaxed)));
