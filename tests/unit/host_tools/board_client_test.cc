@@ -1,0 +1,231 @@
+// The board client on links without a CAN kernel: window summaries reassembled from
+// their five frames, the host heartbeat's cadence.
+#include "mjc/host/board_client.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <initializer_list>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "mjc/protocol/codec.h"
+
+namespace {
+
+using namespace mjc;
+using namespace mjc::host;
+
+// Window summaries through BoardClient: five frames a window, header first.
+
+constexpr std::uint8_t kNode = 1;
+
+// Window `repetition`'s five frames as the board sends them; every value is derived
+// from the repetition, so a window mixed from two would show.
+std::array<protocol::CanFrame, 5> WindowFrames(std::uint16_t repetition) {
+  protocol::WindowHeader h;
+  h.motion = Motion::kFlexion;
+  h.repetition = repetition;
+  h.eta_valid = true;
+  h.eta_percent = Ratio::Quantize(40.0 + repetition);
+  protocol::WindowEnergy e;
+  e.loading = protocol::WireEnergy::Quantize(0.001 * repetition);
+  e.unloading = protocol::WireEnergy::Quantize(-0.0005 * repetition);
+  protocol::WindowWork w;
+  w.positive = protocol::WireEnergy::Quantize(0.002 * repetition);
+  w.negative = protocol::WireEnergy::Quantize(-0.001 * repetition);
+  protocol::WindowPeaks p;
+  p.peak_power = Power::Quantize(0.001 * repetition);
+  p.peak_torque = Torque::Quantize(0.01 * repetition);
+  protocol::WindowTicks t;
+  t.start_tick = 1000u * repetition;
+  t.peak_offset = 100;
+  t.end_offset = 200;
+  return {protocol::Encode(h, kNode), protocol::Encode(e, kNode),
+          protocol::Encode(w, kNode), protocol::Encode(p, kNode),
+          protocol::Encode(t, kNode)};
+}
+
+class WindowAssembly : public ::testing::Test {
+ protected:
+  // Sends window `repetition` without the parts listed in `lost` (0 header … 4 ticks).
+  void SendWindow(std::uint16_t repetition, std::initializer_list<int> lost = {}) {
+    const auto frames = WindowFrames(repetition);
+    for (int part = 0; part < 5; ++part) {
+      if (std::find(lost.begin(), lost.end(), part) != lost.end()) continue;
+      ASSERT_TRUE(board_->Send(frames[static_cast<std::size_t>(part)], &why_));
+    }
+  }
+  std::vector<BoardWindow> Received() {
+    EXPECT_TRUE(client_.Poll(50, &why_)) << why_;
+    return client_.TakeWindows();
+  }
+
+  std::shared_ptr<InProcessBus> bus_ = InProcessBus::Create();
+  std::unique_ptr<CanLink> board_ = bus_->Connect();
+  std::unique_ptr<CanLink> host_ = bus_->Connect();
+  BoardClient client_{host_.get(), kNode};
+  std::string why_;
+};
+
+TEST_F(WindowAssembly, CompleteWindowsArriveWhole) {
+  SendWindow(1);
+  SendWindow(2);
+  const auto windows = Received();
+  ASSERT_EQ(windows.size(), 2u);
+  const BoardWindow& w = windows[1];
+  EXPECT_EQ(w.repetition, 2);
+  EXPECT_TRUE(w.eta_valid);
+  EXPECT_NEAR(w.eta_percent, 42.0, 1e-6);
+  EXPECT_NEAR(w.loading_J, 0.002, 1e-7);
+  EXPECT_NEAR(w.unloading_J, -0.001, 1e-7);
+  EXPECT_NEAR(w.positive_J, 0.004, 1e-7);
+  EXPECT_NEAR(w.negative_J, -0.002, 1e-7);
+  EXPECT_NEAR(w.peak_power_W, 0.002, 1e-6);
+  EXPECT_NEAR(w.peak_torque_Nm, 0.02, 1e-6);
+  EXPECT_EQ(w.start_tick, 2000u);
+  EXPECT_EQ(w.peak_tick, 2100u);
+  EXPECT_EQ(w.end_tick, 2200u);
+  EXPECT_EQ(client_.incomplete_windows(), 0u);
+}
+
+TEST_F(WindowAssembly, LostHeaderDropsTheWindowAndCountsIt) {
+  SendWindow(1);
+  SendWindow(2, {0});
+  SendWindow(3);
+  const auto windows = Received();
+  ASSERT_EQ(windows.size(), 2u);
+  EXPECT_EQ(windows[0].repetition, 1);
+  EXPECT_EQ(windows[1].repetition, 3);
+  EXPECT_NEAR(windows[0].loading_J, 0.001, 1e-7);  // not window 2's
+  EXPECT_EQ(windows[1].start_tick, 3000u);
+  EXPECT_EQ(client_.incomplete_windows(), 1u);
+}
+
+TEST_F(WindowAssembly, LostMiddleOrLastPartDropsTheWindow) {
+  SendWindow(1, {2});  // no WindowWork
+  SendWindow(2, {4});  // no WindowTicks: the next header ends it
+  SendWindow(3);
+  const auto windows = Received();
+  ASSERT_EQ(windows.size(), 1u);
+  EXPECT_EQ(windows[0].repetition, 3);
+  EXPECT_NEAR(windows[0].positive_J, 0.006, 1e-7);
+  EXPECT_EQ(client_.incomplete_windows(), 2u);
+}
+
+TEST_F(WindowAssembly, LostTicksAndNextHeaderDoNotMergeTwoWindows) {
+  // Window 1's ticks and window 2's header lost: window 2's body would complete
+  // window 1 if parts were only collected, not ordered.
+  SendWindow(1, {4});
+  SendWindow(2, {0});
+  SendWindow(3);
+  const auto windows = Received();
+  ASSERT_EQ(windows.size(), 1u);
+  EXPECT_EQ(windows[0].repetition, 3);
+  EXPECT_EQ(client_.incomplete_windows(), 2u);
+}
+
+TEST_F(WindowAssembly, MalformedPartCountsAsLost) {
+  auto frames = WindowFrames(1);
+  frames[1].length = 7;  // WindowEnergy is 8 bytes
+  for (const auto& f : frames) ASSERT_TRUE(board_->Send(f, &why_));
+  EXPECT_TRUE(Received().empty());
+  EXPECT_EQ(client_.malformed(), 1u);
+  EXPECT_EQ(client_.incomplete_windows(), 1u);
+}
+
+// ---------------------------------------------------------------------------------
+// The host heartbeat, on a link that runs a simulated clock: a receive that waits
+// advances it by its whole timeout (the bus is quiet), and every sent frame is kept
+// with the time it was sent.
+
+class SimulatedLink final : public CanLink {
+ public:
+  using Time = std::chrono::steady_clock::time_point;
+  Time now{};
+  std::vector<std::pair<Time, protocol::CanFrame>> sent;
+
+ private:
+  bool DoSend(const protocol::CanFrame& frame, std::string*) override {
+    sent.emplace_back(now, frame);
+    return true;
+  }
+  ReceiveResult DoReceive(int timeout_ms, std::string*) override {
+    now += std::chrono::milliseconds(timeout_ms);
+    return {ReceiveStatus::kTimeout, {}};
+  }
+  bool DoSetFilters(std::span<const IdFilter>, std::string*) override { return true; }
+};
+
+class HostHeartbeatCadence : public ::testing::Test {
+ protected:
+  // The heartbeats sent so far: their times in ms since the start and sequences.
+  std::vector<std::pair<long, int>> Heartbeats() const {
+    std::vector<std::pair<long, int>> out;
+    for (const auto& [time, frame] : link_.sent) {
+      protocol::HostHeartbeat h;
+      if (protocol::Decode(frame, &h) != protocol::DecodeError::kOk) continue;
+      EXPECT_EQ(protocol::NodeOf(frame.id), kNode);
+      const auto ms =
+          std::chrono::duration_cast<std::chrono::milliseconds>(time - start_).count();
+      out.emplace_back(static_cast<long>(ms), h.sequence);
+    }
+    return out;
+  }
+
+  SimulatedLink link_;
+  const SimulatedLink::Time start_ = link_.now;
+  BoardClient client_{&link_, kNode, HostHeartbeats::kSend, [this] { return link_.now; }};
+  std::string why_;
+};
+
+TEST_F(HostHeartbeatCadence, EveryPeriodThroughOneLongPoll) {
+  ASSERT_TRUE(client_.Poll(1000, &why_)) << why_;
+  const auto beats = Heartbeats();
+  // 0, 100, …, 1000 ms: the whole second, ends included, with consecutive sequences.
+  ASSERT_EQ(beats.size(), 11u);
+  for (std::size_t i = 0; i < beats.size(); ++i) {
+    EXPECT_EQ(beats[i].first, 100 * static_cast<long>(i)) << "heartbeat " << i;
+    EXPECT_EQ(beats[i].second, static_cast<int>(i)) << "heartbeat " << i;
+  }
+  EXPECT_EQ(link_.now - start_, std::chrono::milliseconds(1000));  // waited it all
+}
+
+TEST_F(HostHeartbeatCadence, KeepsItsCadenceAcrossShortPolls) {
+  // A caller polling 30 ms at a time (as mjc monitor does in 5 ms steps): the
+  // heartbeat goes out at the first poll after it is due, and the next one is due a
+  // period after the last was, not after it went out, so the average stays 100 ms.
+  for (int i = 0; i < 40; ++i) ASSERT_TRUE(client_.Poll(30, &why_)) << why_;
+  const auto beats = Heartbeats();
+  ASSERT_EQ(beats.size(), 13u);  // due at 0, 100, …, 1200: 1200 ms polled
+  for (std::size_t i = 1; i < beats.size(); ++i) {
+    EXPECT_LE(beats[i].first - beats[i - 1].first, 100 + 30) << "heartbeat " << i;
+    EXPECT_GE(beats[i].first, 100 * static_cast<long>(i)) << "heartbeat " << i;
+    EXPECT_LT(beats[i].first, 100 * static_cast<long>(i) + 30) << "heartbeat " << i;
+  }
+}
+
+TEST_F(HostHeartbeatCadence, FlowWhileACommandWaitsForItsAnswer) {
+  // No answer: the command waits out its 1000 ms in 10 ms polls, heartbeats on time.
+  EXPECT_FALSE(client_.Command(protocol::CommandCode::kStop, 1000, &why_));
+  EXPECT_NE(why_.find("did not answer"), std::string::npos) << why_;
+  EXPECT_FALSE(client_.link_failed());
+  const auto beats = Heartbeats();
+  ASSERT_GE(beats.size(), 10u);
+  for (std::size_t i = 0; i < beats.size(); ++i) {
+    EXPECT_EQ(beats[i].first, 100 * static_cast<long>(i)) << "heartbeat " << i;
+  }
+}
+
+TEST_F(HostHeartbeatCadence, NoneWhenOff) {
+  BoardClient quiet(&link_, kNode, HostHeartbeats::kOff, [this] { return link_.now; });
+  ASSERT_TRUE(quiet.Poll(1000, &why_)) << why_;
+  EXPECT_TRUE(Heartbeats().empty());
+  EXPECT_EQ(link_.now - start_, std::chrono::milliseconds(1000));
+}
+
+}  // namespace

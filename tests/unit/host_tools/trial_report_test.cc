@@ -1,0 +1,124 @@
+// Trial tables and windows.csv made of board windows.
+#include "mjc/host/trial_report.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace mjc;
+using namespace mjc::host;
+
+// Trial tables and windows.csv.
+
+BoardWindow Flexion(std::uint16_t repetition, double eta_percent, bool eta_valid) {
+  BoardWindow w;
+  w.motion = Motion::kFlexion;
+  w.repetition = repetition;
+  w.eta_percent = eta_percent;
+  w.eta_valid = eta_valid;
+  w.loading_J = 0.010;
+  w.unloading_J = -0.005;
+  w.positive_J = 0.011;
+  w.negative_J = -0.006;
+  return w;
+}
+
+TEST(TrialTables, InvalidEtaIsLeftOutOfTheStatisticsAndSaidSo) {
+  // Five repetitions: the middle three flexions are 1, 2, 3; 3's η is invalid (its
+  // value must not count), 0 and 4 are outside the analysis.
+  TrialWindows trial{25.0,
+                     5,
+                     {Flexion(0, 10, true), Flexion(1, 40, true), Flexion(2, 50, true),
+                      Flexion(3, 99, false), Flexion(4, 10, true)}};
+  const std::string tables = TrialTables({trial}, true);
+  // mean(40, 50) = 45, sample std = √((25 + 25) / 1) = 7.071.
+  EXPECT_NE(tables.find("| 1 | 45.00% | 7.071% |"), std::string::npos) << tables;
+  EXPECT_NE(tables.find("| overall | 45.00% | 7.071% |"), std::string::npos) << tables;
+  EXPECT_NE(tables.find("leaves out 1 "), std::string::npos) << tables;
+  // The amplitude table still counts the invalid window's energies (3 × 10 mJ).
+  const std::string amplitude = TrialTables({trial}, false);
+  EXPECT_NE(amplitude.find("| 25° | 10.000 ± 0.000 |"), std::string::npos) << amplitude;
+  EXPECT_NE(amplitude.find("| 45.0% |"), std::string::npos) << amplitude;
+}
+
+TEST(TrialTables, NoValidEtaReadsNotAvailable) {
+  TrialWindows trial{25.0, 3, {Flexion(1, 40, false)}};
+  EXPECT_NE(TrialTables({trial}, true).find("| 1 | n/a | n/a |"), std::string::npos);
+}
+
+class WindowsCsv : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  const std::filesystem::path dir_ =
+      std::filesystem::temp_directory_path() / "mjc_windows_csv_test";
+};
+
+TEST_F(WindowsCsv, RoundTripsEveryWindowAndDerivesTheRepetitions) {
+  BoardWindow extension = Flexion(4, 0, false);
+  extension.motion = Motion::kExtension;
+  const std::vector<TrialWindows> written = {
+      {6.0, 5, {Flexion(0, 41.5, true), Flexion(3, 99, false), extension}},
+      {8.0, 5, {Flexion(1, 47.25, true)}}};
+  WriteWindowsCsv(written, dir_);
+  std::string why;
+  const auto read = ReadWindowsCsv(dir_, &why);
+  ASSERT_TRUE(read) << why;
+  ASSERT_EQ(read->size(), 2u);
+  const TrialWindows& first = (*read)[0];
+  EXPECT_EQ(first.amplitude_deg, 6.0);
+  EXPECT_EQ(first.repetitions, 5);  // repetitions 0..4
+  ASSERT_EQ(first.windows.size(), 3u);
+  EXPECT_TRUE(first.windows[0].eta_valid);
+  EXPECT_EQ(first.windows[0].eta_percent, 41.5);
+  EXPECT_FALSE(first.windows[1].eta_valid);
+  EXPECT_EQ(first.windows[1].positive_J, 0.011);
+  EXPECT_EQ(first.windows[1].negative_J, -0.006);
+  EXPECT_EQ(first.windows[2].motion, Motion::kExtension);
+  EXPECT_EQ((*read)[1].repetitions, 2);  // only repetition 1 seen
+  EXPECT_FALSE(SameAmplitude(*read));
+}
+
+TEST_F(WindowsCsv, AFileOfAnotherLayoutIsRefusedWithTheReason) {
+  std::ofstream(dir_ / "windows.csv")
+      << "trial,amplitude_deg,motion,repetition,eta_pct,loading_J,unloading_J,net_J,"
+         "peak_power_W,peak_torque_Nm\n1,25,flexion,0,40,0.01,-0.005,0.005,0.01,0.1\n";
+  std::string why;
+  EXPECT_FALSE(ReadWindowsCsv(dir_, &why));
+  EXPECT_NE(why.find("the header is not"), std::string::npos) << why;
+}
+
+TEST_F(WindowsCsv, AnUnknownMotionIsMalformed) {
+  WriteWindowsCsv({{25.0, 5, {Flexion(1, 40, true)}}}, dir_);
+  std::stringstream read;
+  read << std::ifstream(dir_ / "windows.csv").rdbuf();
+  std::string text = read.str();
+  text.replace(text.find(",flexion,"), 9, ",sideways,");
+  std::ofstream(dir_ / "windows.csv") << text;
+  std::string why;
+  EXPECT_FALSE(ReadWindowsCsv(dir_, &why));
+  EXPECT_NE(why.find("line 2 is malformed"), std::string::npos) << why;
+}
+
+TEST_F(WindowsCsv, AnUnwritableFolderThrowsNamingTheFile) {
+  const auto missing = dir_ / "no" / "such" / "folder";
+  try {
+    WriteWindowsCsv({}, missing);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find((missing / "windows.csv").string()),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("No such file"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
