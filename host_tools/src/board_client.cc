@@ -10,7 +10,12 @@ using namespace mjc::protocol;
 
 BoardClient::BoardClient(CanLink* link, std::uint8_t node, HostHeartbeats heartbeats,
                          Clock now)
-    : link_(link), node_(node), heartbeats_(heartbeats), now_(std::move(now)) {
+    : link_(link),
+      node_(node),
+      heartbeats_(heartbeats),
+      now_(std::move(now)),
+      bus_off_at_start_(link->stats().bus_off),
+      bus_off_seen_(bus_off_at_start_) {
   // Only a saving: Handle checks the node itself, so a link that cannot filter works.
   const IdFilter only_node{node, 0x00F};
   std::string why;
@@ -69,6 +74,7 @@ bool BoardClient::Poll(int timeout_ms, std::string* why) {
     ReceiveResult r = link_->Receive(static_cast<int>(wait), why);
     const bool arrived = static_cast<bool>(r);
     for (; r; r = link_->Receive(0, why)) Handle(r->frame);
+    NoteBusOff();
     if (r.status == ReceiveStatus::kError) {
       link_failed_ = true;
       return false;
@@ -86,6 +92,13 @@ bool BoardClient::Beat(std::string* why) {
                         ? next_heartbeat_ + kHostHeartbeatPeriod
                         : now + kHostHeartbeatPeriod;
   return Send(HostHeartbeat{heartbeat_sequence_++}, why);
+}
+
+void BoardClient::NoteBusOff() {
+  const std::uint64_t now = link_->stats().bus_off;
+  if (now == bus_off_seen_) return;
+  bus_off_seen_ = now;
+  if (on_bus_off_) on_bus_off_(bus_off());
 }
 
 std::vector<BoardWindow> BoardClient::TakeWindows() {

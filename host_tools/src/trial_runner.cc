@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include "mjc/host/describe.h"
+
 namespace mjc::host {
 
 using namespace mjc::protocol;
@@ -23,8 +25,8 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
     return fail(board.link_failed() ? TrialEnd::kLinkFailed : TrialEnd::kNoAnswer, why);
   }
   if (*outcome != CommandOutcomeCode::kAccepted) {
-    return fail(TrialEnd::kRefused, "the board refused the trial (outcome " +
-                                        std::to_string(static_cast<int>(*outcome)) + ")");
+    return fail(TrialEnd::kRefused,
+                "the board refused the trial: " + std::string(OutcomeName(*outcome)));
   }
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
@@ -39,8 +41,7 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
     const BoardState state = board.status().state;
     if (state == BoardState::kFault) {
       return fail(TrialEnd::kFaulted,
-                  "the board faulted (fault " +
-                      std::to_string(static_cast<int>(board.status().fault)) + ")");
+                  "the board faulted: fault " + DescribeFault(board.status().fault));
     }
     if (state == BoardState::kRunning) running_seen = true;
     if (running_seen && state == BoardState::kIdle) {

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <initializer_list>
 #include <memory>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -226,6 +227,56 @@ TEST_F(HostHeartbeatCadence, NoneWhenOff) {
   ASSERT_TRUE(quiet.Poll(1000, &why_)) << why_;
   EXPECT_TRUE(Heartbeats().empty());
   EXPECT_EQ(link_.now - start_, std::chrono::milliseconds(1000));
+}
+
+// ---------------------------------------------------------------------------------
+// Bus-off: the link counts the controller's bus-off error frames; the client tells its
+// handler the moment one of its waits sees a new one.
+
+class BusOffLink final : public CanLink {
+ public:
+  // The receives (counted from 1) during which an error frame reports bus-off.
+  std::vector<int> bus_off_during;
+  void ReportBusOff() {
+    ++stats_.error_frames;
+    ++stats_.bus_off;
+  }
+
+ private:
+  bool DoSend(const protocol::CanFrame&, std::string*) override { return true; }
+  ReceiveResult DoReceive(int, std::string*) override {
+    ++receives_;
+    if (std::find(bus_off_during.begin(), bus_off_during.end(), receives_) !=
+        bus_off_during.end()) {
+      ReportBusOff();
+    }
+    return {ReceiveStatus::kTimeout, {}};
+  }
+  bool DoSetFilters(std::span<const IdFilter>, std::string*) override { return true; }
+  int receives_ = 0;
+};
+
+TEST(BoardClientBusOff, EachNewReportReachesTheHandlerOnce) {
+  BusOffLink link;
+  link.ReportBusOff();  // before the client: not this client's
+  link.bus_off_during = {2, 4, 5};
+  BoardClient client(&link, kNode);
+  std::vector<std::uint64_t> told;
+  client.OnBusOff([&](std::uint64_t total) { told.push_back(total); });
+  std::string why;
+  for (int i = 0; i < 6; ++i) ASSERT_TRUE(client.Poll(0, &why)) << why;
+  EXPECT_EQ(told, (std::vector<std::uint64_t>{1, 2, 3}));
+  EXPECT_EQ(client.bus_off(), 3u);
+  EXPECT_EQ(link.stats().bus_off, 4u);
+}
+
+TEST(BoardClientBusOff, CountedWithoutAHandler) {
+  BusOffLink link;
+  link.bus_off_during = {1};
+  BoardClient client(&link, kNode);
+  std::string why;
+  ASSERT_TRUE(client.Poll(0, &why)) << why;
+  EXPECT_EQ(client.bus_off(), 1u);
 }
 
 }  // namespace

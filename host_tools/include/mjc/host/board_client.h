@@ -114,11 +114,23 @@ class BoardClient {
   // once); never half-assembled into TakeWindows.
   std::uint64_t incomplete_windows() const { return incomplete_windows_; }
 
+  // Bus-off reports the link received since this client was made: CAN error frames
+  // saying the controller went bus-off. Frames are lost until it recovers, and a board
+  // whose own controller went bus-off stops its motion (kCanBusOff).
+  std::uint64_t bus_off() const { return bus_off_seen_ - bus_off_at_start_; }
+  // Called by the waits (Poll, Command, ReadParam) as soon as they see a new bus-off
+  // report, with bus_off() so far: what lets a tool say so at once.
+  void OnBusOff(std::function<void(std::uint64_t total)> handler) {
+    on_bus_off_ = std::move(handler);
+  }
+
  private:
   void Handle(const protocol::CanFrame& frame);
   bool AcceptWindowPart(int part);
   // Sends the heartbeat when it is due; false when the link failed.
   bool Beat(std::string* why);
+  // Calls the bus-off handler when the link counted new bus-off reports.
+  void NoteBusOff();
 
   CanLink* link_;
   std::uint8_t node_;
@@ -143,6 +155,9 @@ class BoardClient {
   std::uint64_t malformed_ = 0;
   std::uint64_t incomplete_windows_ = 0;
   bool link_failed_ = false;
+  std::uint64_t bus_off_at_start_ = 0;
+  std::uint64_t bus_off_seen_ = 0;
+  std::function<void(std::uint64_t)> on_bus_off_;
 };
 
 }  // namespace mjc::host

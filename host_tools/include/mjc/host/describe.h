@@ -1,0 +1,22 @@
+// Names for the protocol's stable codes, for what the tools print: a fault code or a
+// command outcome alone says little to someone at the bench.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "mjc/core/supervisor.h"
+#include "mjc/protocol/messages.h"
+
+namespace mjc::host {
+
+// What the fault means in a few words ("CAN bus-off"); "unknown fault" for a code this
+// build does not know (a newer board's).
+std::string_view FaultName(Fault fault);
+// "303 (CAN bus-off)": the stable code first, as logs and scripts match it.
+std::string DescribeFault(Fault fault);
+
+// Why the board refused a command ("the board is not idle"), or "accepted".
+std::string_view OutcomeName(protocol::CommandOutcomeCode outcome);
+
+}  // namespace mjc::host
