@@ -17,6 +17,7 @@
 #include "mjc/host/board_client.h"
 #include "mjc/host/calibration_fit.h"
 #include "mjc/host/calibration_io.h"
+#include "mjc/host/describe.h"
 #include "mjc/host/report.h"
 #include "mjc/host/units.h"
 
@@ -72,6 +73,7 @@ void AddCalibrate(CLI::App& app) {
     // Heartbeats flow while the sweep runs: if this tool dies, the board stops it.
     host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
                             host::HostHeartbeats::kSend);
+    SayBusOff(board, "mjc calibrate", iface);
     const std::string who = "node " + std::to_string(node);
     std::string why;
 
@@ -99,8 +101,8 @@ void AddCalibrate(CLI::App& app) {
     const auto outcome = board.Command(CommandCode::kStartSweep, 1000, &why);
     if (!outcome) throw Failure(NoAnswer(board), why);
     if (*outcome != CommandOutcomeCode::kAccepted) {
-      throw Failure(Exit::kRefused, who + " refused the sweep (outcome " +
-                                        std::to_string(static_cast<int>(*outcome)) + ")");
+      throw Failure(Exit::kRefused, who + " refused the sweep: " +
+                                        std::string(host::OutcomeName(*outcome)));
     }
 
     // Record the board's angles until it is idle again.
@@ -118,9 +120,8 @@ void AddCalibrate(CLI::App& app) {
       if (!board.Poll(100, &why)) throw Failure(why);
       const BoardState state = board.status().state;
       if (state == BoardState::kFault) {
-        throw Failure(Exit::kFaulted,
-                      who + " faulted during the sweep (fault " +
-                          std::to_string(static_cast<int>(board.status().fault)) + ")");
+        throw Failure(Exit::kFaulted, who + " faulted during the sweep: fault " +
+                                          host::DescribeFault(board.status().fault));
       }
       if (state == BoardState::kCalibrating) sweeping_seen = true;
       done = sweeping_seen && state == BoardState::kIdle;

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
+#include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -80,6 +81,19 @@ inline std::unique_ptr<host::SocketCanLink> OpenLink(const std::string& iface) {
   return link;
 }
 
+// Has `board`'s waits say on stderr, the moment they see it, that `iface`'s controller
+// reported bus-off: frames are lost until it recovers, and a board on a failing bus
+// stops with kCanBusOff (the tool then reports the fault itself).
+inline void SayBusOff(host::BoardClient& board, const std::string& command,
+                      const std::string& iface) {
+  board.OnBusOff([command, iface](std::uint64_t total) {
+    std::fprintf(stderr,
+                 "\n%s: %s: the CAN controller reported bus-off (%llu since start): "
+                 "frames are lost until it recovers\n",
+                 command.c_str(), iface.c_str(), static_cast<unsigned long long>(total));
+  });
+}
+
 namespace detail {
 inline std::atomic<bool> g_stop{false};
 inline void OnStopSignal(int) { g_stop = true; }
@@ -101,5 +115,7 @@ void AddBusload(CLI::App& app);
 void AddTrial(CLI::App& app);
 void AddReport(CLI::App& app);
 void AddMonitor(CLI::App& app);
+void AddClear(CLI::App& app);
+void AddStop(CLI::App& app);
 
 }  // namespace mjc::cli

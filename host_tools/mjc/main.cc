@@ -42,6 +42,8 @@ int main(int argc, char** argv) {
   mjc::cli::AddTrial(app);
   mjc::cli::AddReport(app);
   mjc::cli::AddMonitor(app);
+  mjc::cli::AddClear(app);
+  mjc::cli::AddStop(app);
   // The subcommands' callbacks run inside parse().
   try {
     app.parse(argc, argv);

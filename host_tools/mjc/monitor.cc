@@ -13,6 +13,7 @@
 
 #include "commands.h"
 #include "mjc/host/board_client.h"
+#include "mjc/host/describe.h"
 
 namespace mjc::cli {
 namespace {
@@ -57,6 +58,8 @@ void AddMonitor(CLI::App& app) {
           links.back().get(), static_cast<std::uint8_t>(node),
           host::HostHeartbeats::kSend));
     }
+    // Every link sees the interface's error frames: the first one's tell of them.
+    SayBusOff(*boards.front(), "mjc monitor", iface);
     const std::atomic<bool>& stop = StopOnSignals();
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::chrono::steady_clock::time_point> last_heard(boards.size(), start);
@@ -84,19 +87,21 @@ void AddMonitor(CLI::App& app) {
           if (silent.find(" " + id + ",") == std::string::npos) silent += " " + id + ",";
           continue;
         }
+        const std::string fault =
+            s.fault == Fault::kNone ? "" : "  fault " + host::DescribeFault(s.fault);
         std::printf(
-            "node %d: %-11s %-12s fault %3d  θm %+8.4f rad  θj %+8.4f rad  τ %+7.4f N·m  "
-            "P %+8.3f mW  E %9.3f mJ\n",
+            "node %d: %-11s %-12s θm %+8.4f rad  θj %+8.4f rad  τ %+7.4f N·m  "
+            "P %+8.3f mW  E %9.3f mJ%s\n",
             nodes[i], StateName(s.state), s.calibrated ? "calibrated" : "uncalibrated",
-            static_cast<int>(s.fault), s.motor_rad, s.joint_rad, s.torque_Nm,
-            s.power_W * 1e3, s.energy_J * 1e3);
+            s.motor_rad, s.joint_rad, s.torque_Nm, s.power_W * 1e3, s.energy_J * 1e3,
+            fault.c_str());
       }
-      // Every link sees the interface's error frames: the first one's count them all.
       const host::LinkStats& bus = links.front()->stats();
       if (bus.error_frames > 0) {
-        std::printf("%s: %llu error frames (%llu bus-off) since start\n", iface.c_str(),
-                    static_cast<unsigned long long>(bus.error_frames),
-                    static_cast<unsigned long long>(bus.bus_off));
+        std::printf("%s: %llu error frames since start, %llu of them bus-off%s\n",
+                    iface.c_str(), static_cast<unsigned long long>(bus.error_frames),
+                    static_cast<unsigned long long>(bus.bus_off),
+                    bus.bus_off > 0 ? " (BUS-OFF)" : "");
       }
       std::fflush(stdout);
       if (seconds > 0 && now - start >= std::chrono::duration<double>(seconds)) break;

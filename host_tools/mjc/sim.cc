@@ -80,10 +80,21 @@ void AddSim(CLI::App& app) {
     const auto start = std::chrono::steady_clock::now();
     const double period = board.tick_period_s();
     std::uint64_t ticks = 0;
+    // The link's error frames stand for this board's CAN controller: a bus-off report
+    // is the driver's bus-off interrupt (the motor stops, kCanBusOff). The simulated
+    // controller rejoins at once, as the board's does after its recovery sequence.
+    std::uint64_t bus_off_seen = link->stats().bus_off;
     while (!stop && (seconds == 0 || static_cast<double>(ticks) * period < seconds)) {
       host::ReceiveResult r;
       while ((r = link->Receive(0, &why))) can.HandleFrame(r->frame);
       if (r.status == host::ReceiveStatus::kError) throw Failure(why);
+      for (; bus_off_seen < link->stats().bus_off; ++bus_off_seen) {
+        can.OnBusOff();
+        std::fprintf(stderr,
+                     "mjc sim: %s: bus-off at %.4f s: motor stopped (fault 303) until "
+                     "the host clears it\n",
+                     iface.c_str(), static_cast<double>(ticks) * period);
+      }
       board.Tick();
       can.Poll();
       protocol::CanFrame out;
@@ -102,11 +113,12 @@ void AddSim(CLI::App& app) {
     std::fprintf(
         stderr,
         "mjc sim: %.1f s simulated; frames sent %llu (send failures %llu), handled %u, "
-        "ignored %u, malformed %u, tx dropped %u\n",
+        "ignored %u, malformed %u, tx dropped %u, bus-off %u\n",
         static_cast<double>(ticks) * period,
         static_cast<unsigned long long>(link->stats().sent),
         static_cast<unsigned long long>(link->stats().tx_failed), c.handled, c.ignored,
-        std::accumulate(c.malformed.begin(), c.malformed.end(), 0u), c.tx_dropped);
+        std::accumulate(c.malformed.begin(), c.malformed.end(), 0u), c.tx_dropped,
+        c.bus_off);
   });
 }
 

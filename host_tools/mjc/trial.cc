@@ -80,6 +80,7 @@ void AddTrial(CLI::App& app) {
     // --pause prompt waits with the board at rest, where their absence is harmless.
     host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
                             host::HostHeartbeats::kSend);
+    SayBusOff(board, "mjc trial", iface);
     const bool repeatability = protocol_name == "repeatability";
     const std::vector<double> plan =
         repeatability

@@ -1,0 +1,118 @@
+// mjc clear / mjc stop: the two commands a person at the bench needs outside a trial.
+// `clear` asks each node to clear its latched fault; the board judges it on the next
+// tick's sample and refuses while the cause is still there (an encoder still flagging
+// an error, a joint still past its limit), so "cleared" means the cause is gone.
+// `stop` ends whatever motion a node runs and leaves its bridge off.
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "mjc/host/describe.h"
+
+namespace mjc::cli {
+namespace {
+
+using protocol::CommandCode;
+using protocol::CommandOutcomeCode;
+
+// A board's heartbeat (its state and latched fault) within timeout_ms; false if none.
+bool AwaitHeartbeat(host::BoardClient& board, int timeout_ms, std::string* why) {
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (!board.status().heard && std::chrono::steady_clock::now() < deadline) {
+    if (!board.Poll(20, why)) return false;
+  }
+  if (!board.status().heard) {
+    *why = "node " + std::to_string(board.node()) + " sent no heartbeat within " +
+           std::to_string(timeout_ms) + " ms";
+    return false;
+  }
+  return true;
+}
+
+// Sends `code` to every node and prints what each answered. Once all were asked, throws
+// the worst status with every failure: one silent node does not keep the others from
+// their command.
+void CommandEach(const std::string& iface, const std::vector<int>& nodes,
+                 CommandCode code, int timeout_ms) {
+  Exit worst = Exit::kOk;
+  std::string failures;
+  const auto fail = [&](Exit exit, const std::string& what) {
+    if (static_cast<int>(exit) > static_cast<int>(worst)) worst = exit;
+    failures += (failures.empty() ? "" : "; ") + what;
+  };
+  for (const int node : nodes) {
+    auto link = OpenLink(iface);
+    host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
+    SayBusOff(board, code == CommandCode::kClearFaults ? "mjc clear" : "mjc stop", iface);
+    const std::string who = "node " + std::to_string(node);
+    std::string why;
+    // A clear first learns the fault held, to say what it cleared; a stop goes at once.
+    if (code == CommandCode::kClearFaults && !AwaitHeartbeat(board, timeout_ms, &why)) {
+      fail(NoAnswer(board), why);
+      continue;
+    }
+    const Fault before = board.status().fault;
+    const auto outcome = board.Command(code, timeout_ms, &why);
+    if (!outcome) {
+      fail(NoAnswer(board), why);
+      continue;
+    }
+    if (code == CommandCode::kStop) {
+      if (*outcome != CommandOutcomeCode::kAccepted) {
+        fail(Exit::kRefused,
+             who + " refused to stop: " + std::string(host::OutcomeName(*outcome)));
+      } else {
+        std::printf("%s stopped\n", who.c_str());
+      }
+      continue;
+    }
+    if (*outcome == CommandOutcomeCode::kAccepted) {
+      if (before == Fault::kNone) {
+        std::printf("%s: no fault latched\n", who.c_str());
+      } else {
+        std::printf("%s: fault %s cleared\n", who.c_str(),
+                    host::DescribeFault(before).c_str());
+      }
+      continue;
+    }
+    // Refused: the fault the board holds now (a clear can meet a new one).
+    board.Poll(50, &why);
+    fail(Exit::kRefused, who + ": fault " + host::DescribeFault(board.status().fault) +
+                             " not cleared: its cause is still present");
+  }
+  if (worst != Exit::kOk) throw Failure(worst, failures);
+}
+
+}  // namespace
+
+void AddClear(CLI::App& app) {
+  auto* cmd = app.add_subcommand("clear",
+                                 "Clear the latched fault of boards whose cause is gone");
+  static std::string iface;
+  static std::vector<int> nodes = {1};
+  static int timeout_ms = 1000;
+  AddIfaceOption(cmd, &iface);
+  AddNodeOption(cmd, &nodes, "Node ids");
+  cmd->add_option("--timeout-ms", timeout_ms, "Wait this long for each board")
+      ->check(CLI::Range(10, 60000))
+      ->capture_default_str();
+  cmd->callback([] { CommandEach(iface, nodes, CommandCode::kClearFaults, timeout_ms); });
+}
+
+void AddStop(CLI::App& app) {
+  auto* cmd = app.add_subcommand("stop", "Stop the motion of boards (bridge off)");
+  static std::string iface;
+  static std::vector<int> nodes = {1};
+  static int timeout_ms = 1000;
+  AddIfaceOption(cmd, &iface);
+  AddNodeOption(cmd, &nodes, "Node ids");
+  cmd->add_option("--timeout-ms", timeout_ms, "Wait this long for each board")
+      ->check(CLI::Range(10, 60000))
+      ->capture_default_str();
+  cmd->callback([] { CommandEach(iface, nodes, CommandCode::kStop, timeout_ms); });
+}
+
+}  // namespace mjc::cli

@@ -1,0 +1,109 @@
+#!/bin/bash
+# CAN bus-off on Debian's CAN stack (run inside the VM by scripts/kernel-vm). A CAN
+# driver tells of bus-off with an error frame (CAN_ERR_BUSOFF); on vcan0 cansend
+# injects one, and every raw socket with an error mask receives it: the simulated
+# board's (`mjc sim` stands its link for the board's controller) and the tools'.
+# During a trial:
+#   - the board stops the motion and sends its Fault frame (0x011 for node 1) with
+#     code 303 (0x012F),
+#     counts the bus-off, and keeps talking (it recovered);
+#   - mjc trial says bus-off on stderr at once, and ends with exit 5 naming fault 303;
+#   - mjc monitor, running meanwhile, says bus-off too;
+#   - mjc clear clears the fault (its cause is gone) and the next trial completes.
+# usage: bus_off.sh <path of mjc>
+set -u
+mjc=$1
+work=$(mktemp -d)
+passed=0
+failed=0
+check() {  # check <description> <command...>
+  local what=$1
+  shift
+  if "$@" >>"$work/check.log" 2>&1; then
+    echo "PASS $what (${SECONDS} s)"
+    passed=$((passed + 1))
+  else
+    echo "FAIL $what (${SECONDS} s)"
+    failed=$((failed + 1))
+  fi
+}
+. "$(dirname "$0")/receivers.sh"
+wait_for() {  # FILE TEXT: wait (at most 20 s) until FILE holds TEXT (pure bash: every
+  local i text  # fork costs ~50 ms under TCG)
+  for ((i = 0; i < 400; i++)); do
+    read -r -d '' text <"$1"
+    [[ $text == *"$2"* ]] && return 0
+    sleep 0.05
+  done
+  echo "no '$2' in $1: $text"
+  return 1
+}
+
+# The plant's own slack (sim_host/params/default.json), so no sweep is needed.
+cat >"$work/cal.json" <<'JSON'
+{"c_right_deg": 1.1001, "c_left_deg": -0.8995, "alpha": 1.0, "sea_stiffness_Nm_per_rad": 0.63, "joint_zero_count": 0}
+JSON
+"$mjc" sim --iface vcan0 --node 1 --subject subject1 --speed 1 2>"$work/sim.err" &
+sim=$!
+check "the simulated board comes up" wait_for "$work/sim.err" "mjc sim: node 1 on vcan0"
+check "calibration upload" "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 1
+
+count_receivers
+base=$receivers
+stdbuf -oL candump -L vcan0,011:7FF >"$work/fault.log" 2>&1 &
+dumper=$!
+"$mjc" monitor --iface vcan0 --node 1 --interval-ms 200 \
+  >"$work/monitor.out" 2>"$work/monitor.err" &
+monitor=$!
+"$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 20 \
+  --frequency-hz 0.5 --rest-s 0.2 --out "$work/trial" >"$work/trial.out" 2>"$work/trial.err" &
+trial=$!
+wait_receivers $((base + 3))  # candump, monitor, trial
+check "the trial runs" wait_for "$work/trial.err" "repetition 1/20"
+
+cansend vcan0 20000040#0000000000000000  # CAN_ERR_FLAG | CAN_ERR_BUSOFF
+wait "$trial"
+status=$?
+check "mjc trial ends with exit 5, the board faulted (exit $status)" test "$status" -eq 5
+check "mjc trial says bus-off at once" grep -q "mjc trial: vcan0: the CAN controller reported bus-off (1 since start)" "$work/trial.err"
+check "mjc trial names fault 303" grep -q "fault 303 (CAN bus-off)" "$work/trial.err"
+check "the board says bus-off" wait_for "$work/sim.err" "mjc sim: vcan0: bus-off at"
+check "the board's Fault frame carries 303 (0x012F)" wait_for "$work/fault.log" "vcan0 011#2F01"
+check "mjc monitor says bus-off at once" wait_for "$work/monitor.err" "mjc monitor: vcan0: the CAN controller reported bus-off"
+check "mjc monitor shows the latched fault" wait_for "$work/monitor.out" "  fault 303 (CAN bus-off)"
+check "mjc monitor counts the bus-off" wait_for "$work/monitor.out" "vcan0: 1 error frames since start, 1 of them bus-off (BUS-OFF)"
+kill -INT "$monitor"
+wait "$monitor"
+
+# The board recovered (it still answers) and its cause is gone: an explicit clear works.
+"$mjc" clear --iface vcan0 --node 1 >"$work/clear.out" 2>"$work/clear.err"
+status=$?
+check "mjc clear exits 0 (exit $status)" test "$status" -eq 0
+check "mjc clear says what it cleared" grep -q "node 1: fault 303 (CAN bus-off) cleared" "$work/clear.out"
+"$mjc" clear --iface vcan0 --node 1 >"$work/clear2.out" 2>&1
+check "a second clear finds nothing latched" grep -q "node 1: no fault latched" "$work/clear2.out"
+"$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 3 \
+  --frequency-hz 2 --rest-s 0.2 --out "$work/after" >"$work/after.out" 2>"$work/after.err"
+status=$?
+check "the next trial completes (exit $status)" test "$status" -eq 0
+"$mjc" stop --iface vcan0 --node 1 >"$work/stop.out" 2>&1
+check "mjc stop is answered" grep -q "node 1 stopped" "$work/stop.out"
+"$mjc" clear --iface vcan0 --node 2 --timeout-ms 300 >"$work/silent.out" 2>"$work/silent.err"
+status=$?
+check "mjc clear of an absent node exits 3 (exit $status)" test "$status" -eq 3
+check "and says why" grep -q "mjc clear: node 2 sent no heartbeat within 300 ms" "$work/silent.err"
+
+kill -INT "$sim"
+wait "$sim"
+kill "$dumper" 2>/dev/null
+wait "$dumper" 2>/dev/null
+check "the board counted one bus-off" grep -q "bus-off 1$" "$work/sim.err"
+check "and one Fault frame" test "$(grep -c '011#' "$work/fault.log")" -eq 1
+
+if [ "$failed" -ne 0 ]; then
+  echo "--- details"
+  tail -n 40 "$work/check.log" "$work/sim.err" "$work/trial.err" "$work/monitor.out" \
+    "$work/monitor.err" "$work/fault.log" "$work/clear.out" "$work/clear.err"
+fi
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
