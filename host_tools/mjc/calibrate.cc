@@ -12,6 +12,7 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <vector>
 
 #include "commands.h"
 #include "mjc/host/board_client.h"
@@ -112,22 +113,43 @@ void AddCalibrate(CLI::App& app) {
     const std::uint64_t malformed_before = board.malformed();
     board.TakeAngles();
     board.KeepAngles(true);
+    // Waited for at the board's pace, not this machine's clock: a board that runs slow
+    // but steadily (a simulated one on a loaded machine) is waited for; one silent for
+    // 2 s, or whose sweep outlasts twice its length counted in its own samples, is not.
     const double expected_s = cycles / frequency_hz + 1.0;
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::duration<double>(expected_s * 3 + 5);
+    const auto most_samples =
+        static_cast<std::size_t>(std::ceil((2 * expected_s + 2) * *rate_hz));
+    std::vector<double> motor, joint;
+    auto last_heard = std::chrono::steady_clock::now();
+    std::uint32_t last_tick = board.status().tick;
     bool sweeping_seen = false, done = false;
-    while (!done && std::chrono::steady_clock::now() < deadline) {
+    while (!done) {
       if (!board.Poll(100, &why)) throw Failure(why);
-      const BoardState state = board.status().state;
-      if (state == BoardState::kFault) {
-        throw Failure(Exit::kFaulted, who + " faulted during the sweep: fault " +
-                                          host::DescribeFault(board.status().fault));
+      const auto now = std::chrono::steady_clock::now();
+      const std::size_t before = motor.size();
+      for (const host::AngleSample& a : board.TakeAngles()) {
+        motor.push_back(a.motor_rad);
+        joint.push_back(a.joint_rad);
       }
-      if (state == BoardState::kCalibrating) sweeping_seen = true;
-      done = sweeping_seen && state == BoardState::kIdle;
+      const host::BoardStatus& s = board.status();
+      if (motor.size() != before || s.tick != last_tick) last_heard = now;
+      last_tick = s.tick;
+      if (s.state == BoardState::kFault) {
+        throw Failure(Exit::kFaulted, who + " faulted during the sweep: fault " +
+                                          host::DescribeFault(s.fault));
+      }
+      if (now - last_heard > std::chrono::seconds(2)) {
+        throw Failure(Exit::kNoAnswer, who + " went silent during the sweep");
+      }
+      if (motor.size() > most_samples) {
+        throw Failure(Exit::kNoAnswer,
+                      who + "'s sweep did not finish within twice its length (" +
+                          std::to_string(static_cast<int>(2 * expected_s)) + " s)");
+      }
+      if (s.state == BoardState::kCalibrating) sweeping_seen = true;
+      done = sweeping_seen && s.state == BoardState::kIdle;
     }
     board.KeepAngles(false);
-    if (!done) throw Failure(Exit::kNoAnswer, "the sweep did not finish in time");
     // A lost sample shifts every later one in time: the lag fit would read it as lag.
     const std::uint64_t dropped = link->stats().rx_dropped - dropped_before;
     const std::uint64_t malformed = board.malformed() - malformed_before;
@@ -137,11 +159,6 @@ void AddCalibrate(CLI::App& app) {
                     " malformed): not fitting it; rerun the sweep on a quieter bus");
     }
 
-    std::vector<double> motor, joint;
-    for (const host::AngleSample& s : board.TakeAngles()) {
-      motor.push_back(s.motor_rad);
-      joint.push_back(s.joint_rad);
-    }
     host::BacklashFitOptions options;
     options.fit_lag = true;
     options.sample_rate_hz = *rate_hz;
