@@ -78,8 +78,14 @@ void CommandEach(const std::string& iface, const std::vector<int>& nodes,
       }
       continue;
     }
-    // Refused: the fault the board holds now (a clear can meet a new one).
-    board.Poll(50, &why);
+    if (*outcome != CommandOutcomeCode::kRefusedFaultActive) {
+      fail(Exit::kRefused,
+           who + " refused the clear: " + std::string(host::OutcomeName(*outcome)));
+      continue;
+    }
+    // The fault the board holds now (a clear can meet a new one); a failed poll leaves
+    // the one it held before.
+    (void)board.Poll(50, &why);
     fail(Exit::kRefused, who + ": fault " + host::DescribeFault(board.status().fault) +
                              " not cleared: its cause is still present");
   }
