@@ -5,6 +5,7 @@
 // `stop` ends whatever motion a node runs and leaves its bridge off.
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -92,33 +93,35 @@ void CommandEach(const std::string& iface, const std::vector<int>& nodes,
   if (worst != Exit::kOk) throw Failure(worst, failures);
 }
 
+// Registers `name`: `code` to each --node, with its options.
+void AddNodeCommand(CLI::App& app, const char* name, const char* help, CommandCode code) {
+  struct Options {
+    std::string iface;
+    std::vector<int> nodes = {1};
+    int timeout_ms = 1000;
+  };
+  auto options = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand(name, help);
+  AddIfaceOption(cmd, &options->iface);
+  AddNodeOption(cmd, &options->nodes, "Node ids");
+  cmd->add_option("--timeout-ms", options->timeout_ms, "Wait this long for each board")
+      ->check(CLI::Range(10, 60000))
+      ->capture_default_str();
+  cmd->callback([options, code] {
+    CommandEach(options->iface, options->nodes, code, options->timeout_ms);
+  });
+}
+
 }  // namespace
 
 void AddClear(CLI::App& app) {
-  auto* cmd = app.add_subcommand("clear",
-                                 "Clear the latched fault of boards whose cause is gone");
-  static std::string iface;
-  static std::vector<int> nodes = {1};
-  static int timeout_ms = 1000;
-  AddIfaceOption(cmd, &iface);
-  AddNodeOption(cmd, &nodes, "Node ids");
-  cmd->add_option("--timeout-ms", timeout_ms, "Wait this long for each board")
-      ->check(CLI::Range(10, 60000))
-      ->capture_default_str();
-  cmd->callback([] { CommandEach(iface, nodes, CommandCode::kClearFaults, timeout_ms); });
+  AddNodeCommand(app, "clear", "Clear the latched fault of boards whose cause is gone",
+                 CommandCode::kClearFaults);
 }
 
 void AddStop(CLI::App& app) {
-  auto* cmd = app.add_subcommand("stop", "Stop the motion of boards (bridge off)");
-  static std::string iface;
-  static std::vector<int> nodes = {1};
-  static int timeout_ms = 1000;
-  AddIfaceOption(cmd, &iface);
-  AddNodeOption(cmd, &nodes, "Node ids");
-  cmd->add_option("--timeout-ms", timeout_ms, "Wait this long for each board")
-      ->check(CLI::Range(10, 60000))
-      ->capture_default_str();
-  cmd->callback([] { CommandEach(iface, nodes, CommandCode::kStop, timeout_ms); });
+  AddNodeCommand(app, "stop", "Stop the motion of boards (bridge off)",
+                 CommandCode::kStop);
 }
 
 }  // namespace mjc::cli

@@ -4,9 +4,8 @@
 # injects one, and every raw socket with an error mask receives it: the simulated
 # board's (`mjc sim` stands its link for the board's controller) and the tools'.
 # During a trial:
-#   - the board stops the motion and sends its Fault frame (0x011 for node 1) with
-#     code 303 (0x012F),
-#     counts the bus-off, and keeps talking (it recovered);
+#   - the board stops the motion, sends its Fault frame (0x011 for node 1) with code
+#     303 (0x012F), counts the bus-off, and keeps talking (it recovered);
 #   - mjc trial says bus-off on stderr at once, and ends with exit 5 naming fault 303;
 #   - mjc monitor, running meanwhile, says bus-off too;
 #   - mjc clear clears the fault (its cause is gone) and the next trial completes.
@@ -14,30 +13,8 @@
 set -u
 mjc=$1
 work=$(mktemp -d)
-passed=0
-failed=0
-check() {  # check <description> <command...>
-  local what=$1
-  shift
-  if "$@" >>"$work/check.log" 2>&1; then
-    echo "PASS $what (${SECONDS} s)"
-    passed=$((passed + 1))
-  else
-    echo "FAIL $what (${SECONDS} s)"
-    failed=$((failed + 1))
-  fi
-}
+. "$(dirname "$0")/checks.sh"
 . "$(dirname "$0")/receivers.sh"
-wait_for() {  # FILE TEXT: wait (at most 20 s) until FILE holds TEXT (pure bash: every
-  local i text  # fork costs ~50 ms under TCG)
-  for ((i = 0; i < 400; i++)); do
-    read -r -d '' text <"$1"
-    [[ $text == *"$2"* ]] && return 0
-    sleep 0.05
-  done
-  echo "no '$2' in $1: $text"
-  return 1
-}
 
 # The plant's own slack (sim_host/params/default.json), so no sweep is needed.
 cat >"$work/cal.json" <<'JSON'
@@ -100,10 +77,5 @@ wait "$dumper" 2>/dev/null
 check "the board counted one bus-off" grep -q "bus-off 1$" "$work/sim.err"
 check "and one Fault frame" test "$(grep -c '011#' "$work/fault.log")" -eq 1
 
-if [ "$failed" -ne 0 ]; then
-  echo "--- details"
-  tail -n 40 "$work/check.log" "$work/sim.err" "$work/trial.err" "$work/monitor.out" \
-    "$work/monitor.err" "$work/fault.log" "$work/clear.out" "$work/clear.err"
-fi
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish "$work/sim.err" "$work/trial.err" "$work/monitor.out" "$work/monitor.err" \
+  "$work/fault.log" "$work/clear.out" "$work/clear.err"

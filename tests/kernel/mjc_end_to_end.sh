@@ -10,19 +10,7 @@ mjc=$1
 work=$(mktemp -d)
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 plant=$here/../../sim_host/params/default.json
-passed=0
-failed=0
-check() {  # check <description> <command...>
-  local what=$1
-  shift
-  if "$@" >>"$work/check.log" 2>&1; then
-    echo "PASS $what"
-    passed=$((passed + 1))
-  else
-    echo "FAIL $what"
-    failed=$((failed + 1))
-  fi
-}
+. "$(dirname "$0")/checks.sh"
 
 # Readiness: a listener started in the background is ready once the CAN core has
 # registered its receiver on vcan0.
@@ -30,13 +18,7 @@ check() {  # check <description> <command...>
 # A simulated board is on the bus once it prints "mjc sim: node N on vcan0" (after its
 # socket, plant and flash are set up).
 wait_sim() {  # ERRFILE NODE: wait (at most 20 s)
-  local i
-  for ((i = 0; i < 400; i++)); do
-    grep -q "mjc sim: node $2 on vcan0" "$1" 2>/dev/null && return 0
-    sleep 0.05
-  done
-  echo "node $2 never came up: $(cat "$1")"
-  return 1
+  wait_for "$1" "mjc sim: node $2 on vcan0"
 }
 # One line on stderr and exit status STATUS: the refusal contract.
 refuses() {  # STATUS ERRFILE COMMAND...: COMMAND exits STATUS with one stderr line
@@ -230,8 +212,4 @@ kill "$sim" "$sim2" 2>/dev/null
 wait "$sim" "$sim2" 2>/dev/null
 check "mjc sim accounted for every frame (no malformed)" grep -q 'malformed 0' "$work/sim.err"
 
-if [ "$failed" -ne 0 ]; then
-  echo "--- details"; tail -n 40 "$work/check.log" "$work/sim.err"
-fi
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish "$work/sim.err"

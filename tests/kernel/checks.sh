@@ -1,0 +1,40 @@
+# Sourced by the kernel-layer scripts that run a list of checks: one PASS or FAIL line
+# per check, each command's output kept in $work/check.log. $work must be set first.
+passed=0
+failed=0
+
+check() {  # DESCRIPTION COMMAND...: runs the command; PASS when it exits 0
+  local what=$1
+  shift
+  if "$@" >>"$work/check.log" 2>&1; then
+    echo "PASS $what (${SECONDS} s)"
+    passed=$((passed + 1))
+  else
+    echo "FAIL $what (${SECONDS} s)"
+    failed=$((failed + 1))
+  fi
+}
+
+# FILE TEXT: waits (at most 20 s) until FILE holds TEXT, for output of a process still
+# running. Pure bash: every fork costs ~50 ms under TCG.
+wait_for() {
+  local i text=
+  for ((i = 0; i < 400; i++)); do
+    read -r -d '' text <"$1" 2>/dev/null
+    [[ $text == *"$2"* ]] && return 0
+    sleep 0.05
+  done
+  echo "no '$2' in $1: $text"
+  return 1
+}
+
+# FILE...: the summary line, with the check log and the given files' tails when a
+# check failed; the status is the script's exit status.
+finish() {
+  if [ "$failed" -ne 0 ]; then
+    echo "--- details"
+    tail -n 40 "$work/check.log" "$@"
+  fi
+  echo "$passed passed, $failed failed"
+  [ "$failed" -eq 0 ]
+}
