@@ -496,8 +496,10 @@ void CanNode::OnBusOff() {
 }
 
 void CanNode::Poll() {
-  const TickResult& r = app_->last();
-  AdvanceClock(r.telemetry.tick);
+  // One tick's values throughout: the tick may interrupt this poll at any point.
+  const JointApp::Snapshot last = app_->Latest();
+  const Telemetry& t = last.telemetry;
+  AdvanceClock(t.tick);
   AppEvent e;
   while (app_->PopEvent(&e)) SendEvent(e);
   if (isotp_.Poll(now_ms_) == IsoTpEvent::kTimeout) {
@@ -507,7 +509,7 @@ void CanNode::Poll() {
   }
 
   const bool streaming =
-      app_->state() == AppState::kRunning && r.telemetry.segment == Segment::kStream;
+      last.state == AppState::kRunning && t.segment == Segment::kStream;
   if (streaming &&
       now_ - last_setpoint_tick_ >
           TicksFromMs(config_.stream_timeout_ms, app_->control().config().tick_hz)) {
@@ -516,7 +518,7 @@ void CanNode::Poll() {
     last_setpoint_tick_ = now_;  // once: the fault ends the stream
   }
   const bool moving =
-      app_->state() == AppState::kRunning || app_->state() == AppState::kCalibrating;
+      last.state == AppState::kRunning || last.state == AppState::kCalibrating;
   const bool host_quiet =
       host_armed_ && config_.host_timeout_ms != 0 &&
       now_ - last_host_tick_ >
@@ -529,7 +531,6 @@ void CanNode::Poll() {
     }
   }
 
-  const Telemetry& t = r.telemetry;
   if (Due(config_.angles_hz, &next_angles_)) Send(TelemetryAngles{t.motor, t.joint});
   if (Due(config_.torque_hz, &next_torque_))
     Send(TelemetryTorque{t.torque, t.cable_side});
@@ -540,13 +541,13 @@ void CanNode::Poll() {
   }
   if (Due(config_.control_hz, &next_control_)) {
     Send(TelemetryControl{t.setpoint, t.duty, t.segment,
-                          static_cast<BoardState>(app_->state())});
+                          static_cast<BoardState>(last.state)});
   }
   if (Due(config_.heartbeat_hz, &next_heartbeat_)) {
     Heartbeat h;
-    h.state = static_cast<BoardState>(app_->state());
-    h.calibrated = app_->calibrated();
-    h.bridge_enabled = r.actuation.bridge_enabled;
+    h.state = static_cast<BoardState>(last.state);
+    h.calibrated = last.calibrated;
+    h.bridge_enabled = last.bridge_enabled;
     h.fault = t.fault;
     h.tick = now_;
     Send(h);

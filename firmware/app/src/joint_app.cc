@@ -122,6 +122,17 @@ void JointApp::ISR_Done(RequestTag tag, CommandOutcome outcome) {
   events_.Push(e);
 }
 
+JointApp::Snapshot JointApp::Latest() const {
+  return done_.Read([this] {
+    Snapshot s;
+    s.telemetry = result_.telemetry;
+    s.bridge_enabled = result_.actuation.bridge_enabled;
+    s.state = state_;
+    s.calibrated = calibrated_;
+    return s;
+  });
+}
+
 void JointApp::ISR_Enter(AppState next) {
   if (next == state_) return;
   state_ = next;

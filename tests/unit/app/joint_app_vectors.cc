@@ -163,6 +163,54 @@ MJC_VECTOR_TEST(JointApp, ConfigurationRefusedUnlessIdle) {
   VT_EXPECT_TRUE(app.Configure(ControlConfig{}).result == CommandResult::kAccepted);
 }
 
+// The main loop's copy of what the tick left: the tick interrupting the copy is stood
+// for by copy functions that advance the count themselves.
+MJC_VECTOR_TEST(TickCount, ACopyATickInterruptedIsTakenAgain) {
+  TickCount count;
+  int copies = 0;
+  VT_EXPECT_EQ(count.Read([&] { return ++copies; }), 1);  // undisturbed: one copy
+  copies = 0;
+  const int kept = count.Read([&] {
+    ++copies;
+    if (copies <= 2) count.ISR_Advance();  // a tick during the first two copies
+    return copies;
+  });
+  VT_EXPECT_EQ(kept, 3);
+  VT_EXPECT_EQ(copies, 3);
+  VT_EXPECT_EQ(count.ticks(), 2u);
+}
+
+MJC_VECTOR_TEST(JointApp, LatestIsWhatTheLastTickLeft) {
+  MJC_FRESH_APP(app);
+  ScriptedIo io;
+  const auto same = [&] {
+    const JointApp::Snapshot s = app.Latest();
+    const TickResult& r = app.last();
+    return s.telemetry.tick == r.telemetry.tick &&
+           s.telemetry.energy_sum == r.telemetry.energy_sum &&
+           s.telemetry.setpoint == r.telemetry.setpoint &&
+           s.telemetry.fault == r.telemetry.fault &&
+           s.bridge_enabled == io.written.bridge_enabled && s.state == app.state() &&
+           s.calibrated == app.calibrated();
+  };
+  VT_EXPECT_TRUE(same());  // before any tick: the defaults
+  app.SetCalibration(TestCalibration());
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(same() && app.Latest().calibrated);
+  app.StartTrial(ShortSine());
+  for (int i = 0; i < 50; ++i) {
+    app.ISR_Tick(io);
+    VT_EXPECT_TRUE(same());
+  }
+  VT_EXPECT_TRUE(app.Latest().bridge_enabled && app.Latest().state == AppState::kRunning);
+  VT_EXPECT_EQ(app.Latest().telemetry.tick, 50u);  // the 51st tick: they count from 0
+  io.corrupt = true;
+  app.ISR_Tick(io);
+  VT_EXPECT_TRUE(same());
+  VT_EXPECT_TRUE(app.Latest().state == AppState::kFault && !app.Latest().bridge_enabled);
+  VT_EXPECT_TRUE(app.Latest().telemetry.fault == Fault::kJointParity);
+}
+
 MJC_VECTOR_TEST(SpscQueue, FullQueueDropsAndCounts) {
   SpscQueue<int, 4> q;
   for (int i = 0; i < 4; ++i) VT_EXPECT_TRUE(q.Push(i));

@@ -21,6 +21,7 @@
 
 #include "hal/joint_io.h"
 #include "mjc/app/spsc_queue.h"
+#include "mjc/app/tick_count.h"
 #include "mjc/core/control_tick.h"
 
 namespace mjc::app {
@@ -109,7 +110,18 @@ class JointApp {
   AppState state() const { return state_; }
   bool calibrated() const { return calibrated_; }
   const ControlTick& control() const { return control_; }
-  // The last tick's result (telemetry, actuation); read between ticks.
+
+  // What the last tick left for the main loop, all of it from that one tick.
+  struct Snapshot {
+    Telemetry telemetry;
+    bool bridge_enabled = false;
+    AppState state = AppState::kIdle;
+    bool calibrated = false;
+  };
+  // Copies the last tick's snapshot; the tick may interrupt the copy (TickCount).
+  Snapshot Latest() const;
+  // The last tick's whole result (telemetry, actuation, window, verdicts), in place:
+  // for tick context, or when no tick can run meanwhile (a simulation between ticks).
   const TickResult& last() const { return result_; }
 
   // --- interrupt context -----------------------------------------------------------
@@ -123,6 +135,7 @@ class JointApp {
     // A state left in this tick (trial done, stop) disarms before the write.
     if (!control_.armed()) result_.actuation = Actuation{};
     io.ISR_Write(result_.actuation);
+    done_.ISR_Advance();
   }
 
  private:
@@ -167,6 +180,7 @@ class JointApp {
   // A ClearFaults the tick is judging: answered from ISR_AfterStep.
   bool clear_pending_ = false;
   RequestTag clear_tag_ = 0;
+  TickCount done_;  // ticks run to their end: Latest's consistent copy
 };
 
 }  // namespace mjc::app
