@@ -2,6 +2,7 @@
 #include "mjc/host/trial_report.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -58,8 +59,9 @@ class WindowsCsv : public ::testing::Test {
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
-  const std::filesystem::path dir_ =
-      std::filesystem::temp_directory_path() / "mjc_windows_csv_test";
+  // Its own folder per process: ctest runs each test as a process, in parallel.
+  const std::filesystem::path dir_ = std::filesystem::temp_directory_path() /
+                                     ("mjc_windows_csv_" + std::to_string(::getpid()));
 };
 
 TEST_F(WindowsCsv, RoundTripsEveryWindowAndDerivesTheRepetitions) {

@@ -5,6 +5,7 @@
 #include "mjc/host/dbc.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -85,7 +86,9 @@ void AddFrames(vt::Rng& rng, std::ofstream& frames, std::vector<Expected>& expec
 TEST(Dbc, IndependentDecoderReadsEverySignalWeEncode) {
   ASSERT_TRUE(fs::exists("/usr/bin/python3"))
       << "Debian's python3 is needed (scripts/setup)";
-  const fs::path dir = fs::temp_directory_path() / "mjc_dbc_test";
+  // Its own folder per process: test runs of several build trees may overlap.
+  const fs::path dir =
+      fs::temp_directory_path() / ("mjc_dbc_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::ofstream(dir / "maestro_jc.dbc") << host::GenerateDbc();
   std::vector<Expected> expected;
@@ -105,8 +108,9 @@ TEST(Dbc, IndependentDecoderReadsEverySignalWeEncode) {
   std::string out;
   char buffer[4096];
   while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) out += buffer;
-  ASSERT_EQ(pclose(pipe), 0) << "canmatrix failed (python3-canmatrix installed?):\n"
-                             << out;
+  const int status = pclose(pipe);
+  fs::remove_all(dir);
+  ASSERT_EQ(status, 0) << "canmatrix failed (python3-canmatrix installed?):\n" << out;
 
   std::istringstream lines(out);
   std::string line;
