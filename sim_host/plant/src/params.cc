@@ -5,12 +5,16 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
-#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "mjc/plant/plant.h"
 
@@ -48,7 +52,7 @@ class Reader {
   // The object `key` of `parent` (prefix names the parent for messages); every key of
   // it must be in `known`.
   const Json& Section(const Json& parent, std::string_view key,
-                      std::initializer_list<std::string_view> known) const {
+                      std::span<const std::string_view> known) const {
     const Json& section = Get(parent, "", key);
     if (!section.is_object()) FieldError(source_, key, "must be an object");
     CheckKnown(section, std::string(key) + ".", known);
@@ -56,7 +60,7 @@ class Reader {
   }
 
   void CheckKnown(const Json& object, const std::string& prefix,
-                  std::initializer_list<std::string_view> known) const {
+                  std::span<const std::string_view> known) const {
     for (const auto& item : object.items()) {
       if (std::find(known.begin(), known.end(), item.key()) == known.end()) {
         FieldError(source_, prefix + item.key(), "is unknown (misspelt?)");
@@ -131,6 +135,74 @@ class Reader {
 
 const char* ModelName(InterfaceModel model) {
   return model == InterfaceModel::kKelvinVoigt ? "kelvin_voigt" : "standard_linear_solid";
+}
+
+// An integer field and the range the file may give it (the field's type's, or tighter).
+template <class T>
+struct Ranged {
+  T& field;
+  std::int64_t lo, hi;
+};
+template <class T>
+Ranged<T> InRange(T& field, std::int64_t lo, std::int64_t hi) {
+  return {field, lo, hi};
+}
+
+// Every field of a parameter set below its name and description, once, in file order:
+// f(section, key, field). The reader and the writer both walk it, so a field added here
+// is read, checked for, and written.
+template <class P, class F>
+void VisitFields(P& p, F&& f) {
+  f("motor", "supply_V", p.motor.supply_V);
+  f("motor", "resistance_ohm", p.motor.resistance_ohm);
+  f("motor", "inductance_H", p.motor.inductance_H);
+  f("motor", "torque_constant_Nm_per_A", p.motor.torque_constant_Nm_per_A);
+  f("motor", "rotor_inertia_kg_m2", p.motor.rotor_inertia_kg_m2);
+  f("motor", "viscous_Nm_s_per_rad", p.motor.viscous_Nm_s_per_rad);
+  f("motor", "coulomb_Nm", p.motor.coulomb_Nm);
+  f("motor", "coulomb_speed_rad_s", p.motor.coulomb_speed_rad_s);
+  f("motor", "gear_ratio", p.motor.gear_ratio);
+  f("motor", "output_inertia_kg_m2", p.motor.output_inertia_kg_m2);
+  f("cable", "alpha", p.cable.alpha);
+  f("cable", "c_right_rad", p.cable.c_right_rad);
+  f("cable", "c_left_rad", p.cable.c_left_rad);
+  f("cable", "contact_stiffness_Nm_per_rad", p.cable.contact_stiffness_Nm_per_rad);
+  f("cable", "contact_damping_Nm_s_per_rad", p.cable.contact_damping_Nm_s_per_rad);
+  f("cable", "contact_damping_ramp_rad", p.cable.contact_damping_ramp_rad);
+  f("cable", "coulomb_Nm", p.cable.coulomb_Nm);
+  f("cable", "bristle_stiffness_Nm_per_rad", p.cable.bristle_stiffness_Nm_per_rad);
+  f("cable", "viscous_Nm_s_per_rad", p.cable.viscous_Nm_s_per_rad);
+  f("cable", "inertia_kg_m2", p.cable.inertia_kg_m2);
+  f("sea", "spring_rate_N_per_m", p.sea.spring_rate_N_per_m);
+  f("sea", "joint_pulley_radius_m", p.sea.joint_pulley_radius_m);
+  f("joint", "inertia_kg_m2", p.joint.inertia_kg_m2);
+  f("joint", "viscous_Nm_s_per_rad", p.joint.viscous_Nm_s_per_rad);
+  f("interface", "present", p.interface.present);
+  f("interface", "model", p.interface.model);
+  f("interface", "stiffness_Nm_per_rad", p.interface.stiffness_Nm_per_rad);
+  f("interface", "damping_Nm_s_per_rad", p.interface.damping_Nm_s_per_rad);
+  f("interface", "maxwell_stiffness_Nm_per_rad",
+    p.interface.maxwell_stiffness_Nm_per_rad);
+  f("interface", "preload_Nm", p.interface.preload_Nm);
+  f("sensors", "motor_counts_per_rev",
+    InRange(p.sensors.motor_counts_per_rev, 1, std::int64_t{1} << 20));
+  f("sensors", "motor_count_at_zero", InRange(p.sensors.motor_count_at_zero, 0, 65535));
+  f("sensors", "motor_noise_counts", p.sensors.motor_noise_counts);
+  f("sensors", "joint_zero_count", InRange(p.sensors.joint_zero_count, 0, 16383));
+  f("sensors", "joint_noise_counts", p.sensors.joint_noise_counts);
+  f("sensors", "noise_seed", p.sensors.noise_seed);
+  f("integration", "max_step_s", p.integration.max_step_s);
+}
+
+// The sections in file order, each with its keys.
+std::vector<std::pair<std::string_view, std::vector<std::string_view>>> Sections() {
+  std::vector<std::pair<std::string_view, std::vector<std::string_view>>> out;
+  const PlantParams p;
+  VisitFields(p, [&out](std::string_view section, std::string_view key, const auto&) {
+    if (out.empty() || out.back().first != section) out.push_back({section, {}});
+    out.back().second.push_back(key);
+  });
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -282,94 +354,43 @@ PlantParams ParsePlantParams(std::string_view json_text, std::string_view source
     throw std::runtime_error(std::string(source) + ": the top level must be an object");
   }
   const Reader r(source);
-  r.CheckKnown(root, "",
-               {"name", "description", "motor", "cable", "sea", "joint", "interface",
-                "sensors", "integration"});
+  const auto sections = Sections();
+  std::vector<std::string_view> top = {"name", "description"};
+  for (const auto& [section, keys] : sections) top.push_back(section);
+  r.CheckKnown(root, "", top);
   PlantParams p;
   p.name = r.String(root, "", "name");
   p.description = root.contains("description") ? r.String(root, "", "description") : "";
-
-  const Json& m =
-      r.Section(root, "motor",
-                {"supply_V", "resistance_ohm", "inductance_H", "torque_constant_Nm_per_A",
-                 "rotor_inertia_kg_m2", "viscous_Nm_s_per_rad", "coulomb_Nm",
-                 "coulomb_speed_rad_s", "gear_ratio", "output_inertia_kg_m2"});
-  p.motor.supply_V = r.Double(m, "motor", "supply_V");
-  p.motor.resistance_ohm = r.Double(m, "motor", "resistance_ohm");
-  p.motor.inductance_H = r.Double(m, "motor", "inductance_H");
-  p.motor.torque_constant_Nm_per_A = r.Double(m, "motor", "torque_constant_Nm_per_A");
-  p.motor.rotor_inertia_kg_m2 = r.Double(m, "motor", "rotor_inertia_kg_m2");
-  p.motor.viscous_Nm_s_per_rad = r.Double(m, "motor", "viscous_Nm_s_per_rad");
-  p.motor.coulomb_Nm = r.Double(m, "motor", "coulomb_Nm");
-  p.motor.coulomb_speed_rad_s = r.Double(m, "motor", "coulomb_speed_rad_s");
-  p.motor.gear_ratio = r.Double(m, "motor", "gear_ratio");
-  p.motor.output_inertia_kg_m2 = r.Double(m, "motor", "output_inertia_kg_m2");
-
-  const Json& k = r.Section(
-      root, "cable",
-      {"alpha", "c_right_rad", "c_left_rad", "contact_stiffness_Nm_per_rad",
-       "contact_damping_Nm_s_per_rad", "contact_damping_ramp_rad", "coulomb_Nm",
-       "bristle_stiffness_Nm_per_rad", "viscous_Nm_s_per_rad", "inertia_kg_m2"});
-  p.cable.alpha = r.Double(k, "cable", "alpha");
-  p.cable.c_right_rad = r.Double(k, "cable", "c_right_rad");
-  p.cable.c_left_rad = r.Double(k, "cable", "c_left_rad");
-  p.cable.contact_stiffness_Nm_per_rad =
-      r.Double(k, "cable", "contact_stiffness_Nm_per_rad");
-  p.cable.contact_damping_Nm_s_per_rad =
-      r.Double(k, "cable", "contact_damping_Nm_s_per_rad");
-  p.cable.contact_damping_ramp_rad = r.Double(k, "cable", "contact_damping_ramp_rad");
-  p.cable.coulomb_Nm = r.Double(k, "cable", "coulomb_Nm");
-  p.cable.bristle_stiffness_Nm_per_rad =
-      r.Double(k, "cable", "bristle_stiffness_Nm_per_rad");
-  p.cable.viscous_Nm_s_per_rad = r.Double(k, "cable", "viscous_Nm_s_per_rad");
-  p.cable.inertia_kg_m2 = r.Double(k, "cable", "inertia_kg_m2");
-
-  const Json& s =
-      r.Section(root, "sea", {"spring_rate_N_per_m", "joint_pulley_radius_m"});
-  p.sea.spring_rate_N_per_m = r.Double(s, "sea", "spring_rate_N_per_m");
-  p.sea.joint_pulley_radius_m = r.Double(s, "sea", "joint_pulley_radius_m");
-
-  const Json& j = r.Section(root, "joint", {"inertia_kg_m2", "viscous_Nm_s_per_rad"});
-  p.joint.inertia_kg_m2 = r.Double(j, "joint", "inertia_kg_m2");
-  p.joint.viscous_Nm_s_per_rad = r.Double(j, "joint", "viscous_Nm_s_per_rad");
-
-  const Json& i =
-      r.Section(root, "interface",
-                {"present", "model", "stiffness_Nm_per_rad", "damping_Nm_s_per_rad",
-                 "maxwell_stiffness_Nm_per_rad", "preload_Nm"});
-  p.interface.present = r.Bool(i, "interface", "present");
-  const std::string model = r.String(i, "interface", "model");
-  if (model == "kelvin_voigt") {
-    p.interface.model = InterfaceModel::kKelvinVoigt;
-  } else if (model == "standard_linear_solid") {
-    p.interface.model = InterfaceModel::kStandardLinearSolid;
-  } else {
-    FieldError(
-        source, "interface.model",
-        "= \"" + model + "\" is not \"kelvin_voigt\" or \"standard_linear_solid\"");
-  }
-  p.interface.stiffness_Nm_per_rad = r.Double(i, "interface", "stiffness_Nm_per_rad");
-  p.interface.damping_Nm_s_per_rad = r.Double(i, "interface", "damping_Nm_s_per_rad");
-  p.interface.maxwell_stiffness_Nm_per_rad =
-      r.Double(i, "interface", "maxwell_stiffness_Nm_per_rad");
-  p.interface.preload_Nm = r.Double(i, "interface", "preload_Nm");
-
-  const Json& n =
-      r.Section(root, "sensors",
-                {"motor_counts_per_rev", "motor_count_at_zero", "motor_noise_counts",
-                 "joint_zero_count", "joint_noise_counts", "noise_seed"});
-  p.sensors.motor_counts_per_rev = static_cast<std::int32_t>(
-      r.Integer(n, "sensors", "motor_counts_per_rev", 1, 1 << 20));
-  p.sensors.motor_count_at_zero = static_cast<std::uint16_t>(
-      r.Integer(n, "sensors", "motor_count_at_zero", 0, 65535));
-  p.sensors.motor_noise_counts = r.Double(n, "sensors", "motor_noise_counts");
-  p.sensors.joint_zero_count =
-      static_cast<std::uint16_t>(r.Integer(n, "sensors", "joint_zero_count", 0, 16383));
-  p.sensors.joint_noise_counts = r.Double(n, "sensors", "joint_noise_counts");
-  p.sensors.noise_seed = r.Unsigned64(n, "sensors", "noise_seed");
-
-  const Json& g = r.Section(root, "integration", {"max_step_s"});
-  p.integration.max_step_s = r.Double(g, "integration", "max_step_s");
+  // A section is checked (an object, no unknown key) before its first field is read.
+  std::size_t next_section = 0;
+  const Json* s = nullptr;
+  VisitFields(p, [&](std::string_view section, std::string_view key, auto&& field) {
+    if (s == nullptr || sections[next_section - 1].first != section) {
+      s = &r.Section(root, section, sections[next_section++].second);
+    }
+    using T = std::remove_cvref_t<decltype(field)>;
+    if constexpr (std::is_same_v<T, double>) {
+      field = r.Double(*s, section, key);
+    } else if constexpr (std::is_same_v<T, bool>) {
+      field = r.Bool(*s, section, key);
+    } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+      field = r.Unsigned64(*s, section, key);
+    } else if constexpr (std::is_same_v<T, InterfaceModel>) {
+      const std::string model = r.String(*s, section, key);
+      if (model == ModelName(InterfaceModel::kKelvinVoigt)) {
+        field = InterfaceModel::kKelvinVoigt;
+      } else if (model == ModelName(InterfaceModel::kStandardLinearSolid)) {
+        field = InterfaceModel::kStandardLinearSolid;
+      } else {
+        FieldError(
+            source, "interface.model",
+            "= \"" + model + "\" is not \"kelvin_voigt\" or \"standard_linear_solid\"");
+      }
+    } else {  // Ranged<integer>
+      using Integer = std::remove_cvref_t<decltype(field.field)>;
+      field.field = static_cast<Integer>(r.Integer(*s, section, key, field.lo, field.hi));
+    }
+  });
 
   ValidatePlantParams(p, source);
   return p;
@@ -400,44 +421,18 @@ std::string PlantParamsToJson(const PlantParams& p) {
   Json root;
   root["name"] = p.name;
   root["description"] = p.description;
-  root["motor"] = {{"supply_V", p.motor.supply_V},
-                   {"resistance_ohm", p.motor.resistance_ohm},
-                   {"inductance_H", p.motor.inductance_H},
-                   {"torque_constant_Nm_per_A", p.motor.torque_constant_Nm_per_A},
-                   {"rotor_inertia_kg_m2", p.motor.rotor_inertia_kg_m2},
-                   {"viscous_Nm_s_per_rad", p.motor.viscous_Nm_s_per_rad},
-                   {"coulomb_Nm", p.motor.coulomb_Nm},
-                   {"coulomb_speed_rad_s", p.motor.coulomb_speed_rad_s},
-                   {"gear_ratio", p.motor.gear_ratio},
-                   {"output_inertia_kg_m2", p.motor.output_inertia_kg_m2}};
-  root["cable"] = {{"alpha", p.cable.alpha},
-                   {"c_right_rad", p.cable.c_right_rad},
-                   {"c_left_rad", p.cable.c_left_rad},
-                   {"contact_stiffness_Nm_per_rad", p.cable.contact_stiffness_Nm_per_rad},
-                   {"contact_damping_Nm_s_per_rad", p.cable.contact_damping_Nm_s_per_rad},
-                   {"contact_damping_ramp_rad", p.cable.contact_damping_ramp_rad},
-                   {"coulomb_Nm", p.cable.coulomb_Nm},
-                   {"bristle_stiffness_Nm_per_rad", p.cable.bristle_stiffness_Nm_per_rad},
-                   {"viscous_Nm_s_per_rad", p.cable.viscous_Nm_s_per_rad},
-                   {"inertia_kg_m2", p.cable.inertia_kg_m2}};
-  root["sea"] = {{"spring_rate_N_per_m", p.sea.spring_rate_N_per_m},
-                 {"joint_pulley_radius_m", p.sea.joint_pulley_radius_m}};
-  root["joint"] = {{"inertia_kg_m2", p.joint.inertia_kg_m2},
-                   {"viscous_Nm_s_per_rad", p.joint.viscous_Nm_s_per_rad}};
-  root["interface"] = {
-      {"present", p.interface.present},
-      {"model", ModelName(p.interface.model)},
-      {"stiffness_Nm_per_rad", p.interface.stiffness_Nm_per_rad},
-      {"damping_Nm_s_per_rad", p.interface.damping_Nm_s_per_rad},
-      {"maxwell_stiffness_Nm_per_rad", p.interface.maxwell_stiffness_Nm_per_rad},
-      {"preload_Nm", p.interface.preload_Nm}};
-  root["sensors"] = {{"motor_counts_per_rev", p.sensors.motor_counts_per_rev},
-                     {"motor_count_at_zero", p.sensors.motor_count_at_zero},
-                     {"motor_noise_counts", p.sensors.motor_noise_counts},
-                     {"joint_zero_count", p.sensors.joint_zero_count},
-                     {"joint_noise_counts", p.sensors.joint_noise_counts},
-                     {"noise_seed", p.sensors.noise_seed}};
-  root["integration"] = {{"max_step_s", p.integration.max_step_s}};
+  VisitFields(p,
+              [&root](std::string_view section, std::string_view key, const auto& field) {
+                using T = std::remove_cvref_t<decltype(field)>;
+                Json& value = root[std::string(section)][std::string(key)];
+                if constexpr (std::is_same_v<T, InterfaceModel>) {
+                  value = ModelName(field);
+                } else if constexpr (requires { field.field; }) {
+                  value = field.field;
+                } else {
+                  value = field;
+                }
+              });
   return root.dump(2) + "\n";
 }
 
