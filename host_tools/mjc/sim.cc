@@ -113,11 +113,12 @@ void AddSim(CLI::App& app) {
     std::fprintf(
         stderr,
         "mjc sim: %.1f s simulated; frames sent %llu (send failures %llu), handled %u, "
-        "ignored %u, malformed %u, tx dropped %u, bus-off %u\n",
+        "ignored %u, malformed %u, rx dropped %llu, tx dropped %u, bus-off %u\n",
         static_cast<double>(ticks) * period,
         static_cast<unsigned long long>(link->stats().sent),
         static_cast<unsigned long long>(link->stats().tx_failed), c.handled, c.ignored,
-        std::accumulate(c.malformed.begin(), c.malformed.end(), 0u), c.tx_dropped,
+        std::accumulate(c.malformed.begin(), c.malformed.end(), 0u),
+        static_cast<unsigned long long>(link->stats().rx_dropped), c.tx_dropped,
         c.bus_off);
   });
 }
