@@ -49,7 +49,7 @@ malformed=$(field malformed)
 ignored=$(field ignored)
 rx_dropped=$(field 'rx dropped')
 tx_dropped=$(field 'tx dropped')
-echo "flood_frames_dropped: $((rx_dropped + tx_dropped)) (of 2 x $frames: rx $rx_dropped, tx $tx_dropped)"
+echo "flood_frames_dropped: $((rx_dropped + tx_dropped)) (of 2 x $frames flood frames; rx $rx_dropped, tx $tx_dropped)"
 [ "$malformed" = "$frames" ] || fail "malformed $malformed, sent $frames"
 [ "$ignored" = "$frames" ] || fail "ignored $ignored, sent $frames of another board's"
 [ "$rx_dropped" = 0 ] || fail "rx dropped $rx_dropped"
