@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <numeric>
 #include <thread>
@@ -18,9 +19,23 @@
 #include "mjc/sim/scenarios.h"
 
 namespace mjc::cli {
+namespace {
+
+// SIGUSR1 raises the joint encoder's error flag until SIGUSR2 clears it: a sensor fault
+// whose cause stays present, on demand, for the tools' fault handling (a clear is then
+// refused until SIGUSR2).
+std::atomic<int> g_sensor_fault{0};  // +1 raise, -1 clear, 0 nothing new
+void OnSensorFaultSignal(int signal) { g_sensor_fault = signal == SIGUSR1 ? 1 : -1; }
+
+}  // namespace
 
 void AddSim(CLI::App& app) {
   auto* cmd = app.add_subcommand("sim", "Run a simulated joint board on a CAN interface");
+  cmd->footer(
+      std::string(kExitStatusHelp) +
+      "\n\nSignals: SIGUSR1 makes the joint encoder flag an error (fault 101) until "
+      "SIGUSR2. "
+      "A bus-off error frame on the interface is taken as the board's own bus-off.");
   static std::string iface, robot = "default", subject, flash_path;
   static int node = 1;
   static double seconds = 0, speed = 1;
@@ -74,6 +89,8 @@ void AddSim(CLI::App& app) {
                          std::lround(node_config.host_timeout_ms * speed), 1L, 60000L));
     app::CanNode can(&board.app(), node_config, &store);
     const std::atomic<bool>& stop = StopOnSignals();
+    std::signal(SIGUSR1, OnSensorFaultSignal);
+    std::signal(SIGUSR2, OnSensorFaultSignal);
     std::fprintf(
         stderr, "mjc sim: node %d on %s (%s%s)\n", node, iface.c_str(), robot.c_str(),
         subject.empty() ? ", robot alone" : (", " + subject + " donned").c_str());
@@ -94,6 +111,16 @@ void AddSim(CLI::App& app) {
                      "mjc sim: %s: bus-off at %.4f s: motor stopped (fault 303) until "
                      "the host clears it\n",
                      iface.c_str(), static_cast<double>(ticks) * period);
+      }
+      if (const int fault = g_sensor_fault.exchange(0); fault != 0) {
+        if (fault > 0) {
+          board.plant().InjectFault({plant::SensorFaultKind::kJointErrorFlag, 0, 0});
+        } else {
+          board.plant().ClearFaults();
+        }
+        std::fprintf(stderr, "mjc sim: joint encoder error flag %s at %.4f s\n",
+                     fault > 0 ? "raised" : "cleared",
+                     static_cast<double>(ticks) * period);
       }
       board.Tick();
       can.Poll();

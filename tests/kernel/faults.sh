@@ -1,15 +1,19 @@
 #!/bin/bash
-# CAN bus-off on Debian's CAN stack (run inside the VM by scripts/kernel-vm). A CAN
-# driver tells of bus-off with an error frame (CAN_ERR_BUSOFF); on vcan0 cansend
-# injects one, and every raw socket with an error mask receives it: the simulated
-# board's (`mjc sim` stands its link for the board's controller) and the tools'.
-# During a trial:
+# Faults and their clearing on Debian's CAN stack (run inside the VM by
+# scripts/kernel-vm).
+#
+# CAN bus-off: a CAN driver tells of bus-off with an error frame (CAN_ERR_BUSOFF); on
+# vcan0 cansend injects one, and every raw socket with an error mask receives it: the
+# simulated board's (`mjc sim` stands its link for the board's controller) and the
+# tools'. During a trial:
 #   - the board stops the motion, sends its Fault frame (0x011 for node 1) with code
 #     303 (0x012F), counts the bus-off, and keeps talking (it recovered);
 #   - mjc trial says bus-off on stderr at once, and ends with exit 5 naming fault 303;
 #   - mjc monitor, running meanwhile, says bus-off too;
 #   - mjc clear clears the fault (its cause is gone) and the next trial completes.
-# usage: bus_off.sh <path of mjc>
+# A cause that stays: the joint encoder flags an error (mjc sim's SIGUSR1); mjc clear is
+# refused (exit 4, naming fault 101) until the flag is gone, then accepted.
+# usage: faults.sh <path of mjc>
 set -u
 mjc=$1
 work=$(mktemp -d)
@@ -70,12 +74,29 @@ status=$?
 check "mjc clear of an absent node exits 3 (exit $status)" test "$status" -eq 3
 check "and says why" grep -q "mjc clear: node 2 sent no heartbeat within 300 ms" "$work/silent.err"
 
+# A cause that stays: the joint encoder flags an error (mjc sim's SIGUSR1) at rest.
+kill -USR1 "$sim"
+check "the board says the encoder flags an error" wait_for "$work/sim.err" "joint encoder error flag raised"
+"$mjc" monitor --iface vcan0 --node 1 --seconds 1 --interval-ms 200 >"$work/ef.out" 2>&1
+check "the board latched fault 101" grep -q "fault 101 (joint encoder error flag)" "$work/ef.out"
+"$mjc" clear --iface vcan0 --node 1 >"$work/refused.out" 2>"$work/refused.err"
+status=$?
+check "mjc clear while the cause is present exits 4 (exit $status)" test "$status" -eq 4
+check "and names the fault still held" grep -q "mjc clear: node 1: fault 101 (joint encoder error flag) not cleared: its cause is still present" "$work/refused.err"
+kill -USR2 "$sim"
+check "the encoder recovers" wait_for "$work/sim.err" "joint encoder error flag cleared"
+"$mjc" clear --iface vcan0 --node 1 >"$work/cleared.out" 2>&1
+status=$?
+check "once it is gone, mjc clear exits 0 (exit $status)" test "$status" -eq 0
+check "and says what it cleared" grep -q "node 1: fault 101 (joint encoder error flag) cleared" "$work/cleared.out"
+
 kill -INT "$sim"
 wait "$sim"
 kill "$dumper" 2>/dev/null
 wait "$dumper" 2>/dev/null
 check "the board counted one bus-off" grep -q "bus-off 1$" "$work/sim.err"
-check "and one Fault frame" test "$(grep -c '011#' "$work/fault.log")" -eq 1
+codes=$(sed -n 's/.* 011#\(....\).*/\1/p' "$work/fault.log" | tr '\n' ' ')
+check "and sent two Fault frames, 303 then 101 (codes $codes)" test "$codes" = "2F01 6500 "
 
 finish "$work/sim.err" "$work/trial.err" "$work/monitor.out" "$work/monitor.err" \
   "$work/fault.log" "$work/clear.out" "$work/clear.err"
