@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "mjc/host/calibration_io.h"
+#include "mjc/host/describe.h"
 #include "mjc/host/report.h"
 
 namespace mjc::cli {

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "mjc/host/can_link.h"
+#include "mjc/host/describe.h"
 #include "mjc/host/units.h"
 #include "mjc/protocol/can_frame.h"
 #include "mjc/protocol/messages.h"
@@ -79,47 +80,6 @@ std::optional<protocol::CalibrationRecord> CalibrationFromJson(const nlohmann::j
     return std::nullopt;
   }
   return checked;
-}
-
-std::string DescribeCalibrationResult(protocol::CalibrationResult result,
-                                      std::uint8_t detail) {
-  using R = protocol::CalibrationResult;
-  switch (result) {
-    case R::kAccepted:
-      return "accepted";
-    case R::kWrongSize:
-      return "wrong record size";
-    case R::kBadMagic:
-      return "not a calibration record";
-    case R::kUnsupportedVersion:
-      return "unsupported record version";
-    case R::kBadCrc:
-      return "bad CRC (corrupted in transit)";
-    case R::kRefusedNotIdle:
-      return "the board is not idle";
-    case R::kReassemblyError:
-      return "ISO-TP transfer failed (" + std::to_string(detail) + ")";
-    case R::kStorageFailed:
-      return "applied, but the board could not store it in flash";
-    case R::kRefusedBusy:
-      return "the board is still applying an earlier change: try again";
-    case R::kOutOfRange:
-      switch (detail) {
-        case 1:
-          return "alpha outside (1/8, 8)";
-        case 2:
-          return "an offset outside ±28.6° (0.5 rad)";
-        case 3:
-          return "c_left above c_right";
-        case 100:
-          return "SEA stiffness outside (0, 100] N·m/rad";
-        case 101:
-          return "joint zero count outside 0..16383";
-        default:
-          return "a value out of range (" + std::to_string(detail) + ")";
-      }
-  }
-  return "unknown result " + std::to_string(static_cast<int>(result));
 }
 
 UploadOutcome UploadCalibration(const std::string& iface, int node,

@@ -60,4 +60,46 @@ std::string_view OutcomeName(protocol::CommandOutcomeCode outcome) {
   return "unknown outcome";
 }
 
+std::string DescribeCalibrationResult(protocol::CalibrationResult result,
+                                      std::uint8_t detail) {
+  using R = protocol::CalibrationResult;
+  switch (result) {
+    case R::kAccepted:
+      return "accepted";
+    case R::kWrongSize:
+      return "wrong record size";
+    case R::kBadMagic:
+      return "not a calibration record";
+    case R::kUnsupportedVersion:
+      return "unsupported record version";
+    case R::kBadCrc:
+      return "bad CRC (corrupted in transit)";
+    case R::kRefusedNotIdle:
+      return "the board is not idle";
+    case R::kReassemblyError:
+      return "ISO-TP transfer failed (" + std::to_string(detail) + ")";
+    case R::kStorageFailed:
+      return "applied, but the board could not store it in flash";
+    case R::kRefusedBusy:
+      return "the board is still applying an earlier change: try again";
+    case R::kOutOfRange:
+      // The detail is the CalibrationError, whose low codes are the backlash's.
+      switch (detail) {
+        case static_cast<std::uint8_t>(BacklashConfigError::kAlphaOutOfRange):
+          return "alpha outside (1/8, 8)";
+        case static_cast<std::uint8_t>(BacklashConfigError::kOffsetOutOfRange):
+          return "an offset outside ±28.6° (0.5 rad)";
+        case static_cast<std::uint8_t>(BacklashConfigError::kLeftAboveRight):
+          return "c_left above c_right";
+        case static_cast<std::uint8_t>(CalibrationError::kStiffness):
+          return "SEA stiffness outside (0, 100] N·m/rad";
+        case static_cast<std::uint8_t>(CalibrationError::kJointZero):
+          return "joint zero count outside 0..16383";
+        default:
+          return "a value out of range (" + std::to_string(detail) + ")";
+      }
+  }
+  return "unknown result " + std::to_string(static_cast<int>(result));
+}
+
 }  // namespace mjc::host

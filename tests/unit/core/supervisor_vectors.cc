@@ -221,25 +221,20 @@ MJC_VECTOR_TEST(SupervisorFault, TickOverrun) {
   VT_EXPECT_EQ(F(Fault::kTickOverrun), 300);
 }
 
-MJC_VECTOR_TEST(SupervisorFault, CommandTimeout) {
-  SupervisorInput faulty = Rest();
-  faulty.external = Fault::kCommandTimeout;
-  CheckVisibleCauseLifecycle(vt_context, Rest(), faulty, Fault::kCommandTimeout);
-  VT_EXPECT_EQ(F(Fault::kCommandTimeout), 301);
-}
-
-MJC_VECTOR_TEST(SupervisorFault, HostHeartbeatLost) {
-  SupervisorInput faulty = Rest();
-  faulty.external = Fault::kHostHeartbeatLost;
-  CheckVisibleCauseLifecycle(vt_context, Rest(), faulty, Fault::kHostHeartbeatLost);
-  VT_EXPECT_EQ(F(Fault::kHostHeartbeatLost), 302);
-}
-
-MJC_VECTOR_TEST(SupervisorFault, CanBusOff) {
-  SupervisorInput faulty = Rest();
-  faulty.external = Fault::kCanBusOff;
-  CheckVisibleCauseLifecycle(vt_context, Rest(), faulty, Fault::kCanBusOff);
-  VT_EXPECT_EQ(F(Fault::kCanBusOff), 303);
+// The main loop's faults (command timeout, host heartbeat lost, bus-off).
+MJC_VECTOR_TEST(SupervisorFault, External) {
+  struct Case {
+    Fault fault;
+    int code;
+  };
+  for (const Case c :
+       {Case{Fault::kCommandTimeout, 301}, Case{Fault::kHostHeartbeatLost, 302},
+        Case{Fault::kCanBusOff, 303}}) {
+    SupervisorInput faulty = Rest();
+    faulty.external = c.fault;
+    CheckVisibleCauseLifecycle(vt_context, Rest(), faulty, c.fault);
+    VT_EXPECT_EQ(F(c.fault), c.code);
+  }
 }
 
 MJC_VECTOR_TEST(SupervisorFault, JointJump) {

@@ -42,4 +42,43 @@ TEST(Describe, EveryCommandOutcomeHasItsOwnName) {
   }
 }
 
+TEST(Describe, EveryCalibrationRefusalSaysWhichField) {
+  using protocol::CalibrationResult;
+  // Every result a board sends (0..9) has its own text.
+  std::set<std::string> texts;
+  for (unsigned code = 0; code <= 9; ++code) {
+    const std::string text =
+        host::DescribeCalibrationResult(static_cast<CalibrationResult>(code), 0);
+    EXPECT_EQ(text.find("unknown"), std::string::npos) << code;
+    EXPECT_TRUE(texts.insert(text).second) << code;
+  }
+  // Every field Validate(Calibration) can refuse is named, none as the generic text.
+  const mjc::Calibration good;
+  std::set<CalibrationError> seen;
+  const auto named = [&](const mjc::Calibration& c) {
+    const CalibrationError e = Validate(c);
+    seen.insert(e);
+    return host::DescribeCalibrationResult(CalibrationResult::kOutOfRange,
+                                           static_cast<std::uint8_t>(e));
+  };
+  mjc::Calibration c = good;
+  c.backlash.alpha = Scale::FromDouble(0.1);  // below 1/8
+  EXPECT_EQ(named(c), "alpha outside (1/8, 8)");
+  c = good;
+  c.backlash.c_right = Angle::FromDouble(0.6);
+  EXPECT_EQ(named(c), "an offset outside ±28.6° (0.5 rad)");
+  c = good;
+  c.backlash.c_left = Angle::FromDouble(0.1);
+  c.backlash.c_right = Angle::FromDouble(0.05);
+  EXPECT_EQ(named(c), "c_left above c_right");
+  c = good;
+  c.sea_stiffness = Stiffness{};
+  EXPECT_EQ(named(c), "SEA stiffness outside (0, 100] N·m/rad");
+  c = good;
+  c.joint_zero_count = 16384;
+  EXPECT_EQ(named(c), "joint zero count outside 0..16383");
+  EXPECT_EQ(seen.size(), 5u);  // five distinct refusals
+  EXPECT_EQ(Validate(good), CalibrationError::kOk);
+}
+
 }  // namespace

@@ -55,8 +55,4 @@ struct BoardCalibration {
 // 500 ms per read). nullopt with the first failure's reason.
 std::optional<BoardCalibration> ReadCalibration(BoardClient& board, std::string* why);
 
-// "accepted", "refused: bad CRC", … for messages.
-std::string DescribeCalibrationResult(protocol::CalibrationResult result,
-                                      std::uint8_t detail);
-
 }  // namespace mjc::host

@@ -2,10 +2,13 @@
 // command outcome alone says little to someone at the bench.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 
+#include "mjc/core/control_tick.h"
 #include "mjc/core/supervisor.h"
+#include "mjc/protocol/calibration_record.h"
 #include "mjc/protocol/messages.h"
 
 namespace mjc::host {
@@ -18,5 +21,10 @@ std::string DescribeFault(Fault fault);
 
 // Why the board refused a command ("the board is not idle"), or "accepted".
 std::string_view OutcomeName(protocol::CommandOutcomeCode outcome);
+
+// The board's answer to a calibration upload ("accepted", "bad CRC (corrupted in
+// transit)", "c_left above c_right", …); `detail` names the field out of range.
+std::string DescribeCalibrationResult(protocol::CalibrationResult result,
+                                      std::uint8_t detail);
 
 }  // namespace mjc::host

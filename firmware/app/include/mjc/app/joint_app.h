@@ -94,8 +94,9 @@ class JointApp {
   }
   // The CAN side saw the setpoint stream or the host go quiet, or the bus go off
   // (IsExternalFault codes; others are ignored): the next tick latches the fault and
-  // stops the motor. Lock-free and never lost: the tick takes the pending code with
-  // one atomic exchange. Two raised before one tick latch the later one.
+  // stops the motor. Lock-free and never lost: the tick loads the code and, when one
+  // is pending, takes it with an atomic exchange. Two raised before one tick latch the
+  // later one.
   void RaiseFault(Fault fault) {
     if (IsExternalFault(fault)) {
       raised_fault_.store(static_cast<std::uint16_t>(fault), std::memory_order_release);
