@@ -113,41 +113,42 @@ void AddCalibrate(CLI::App& app) {
     const std::uint64_t malformed_before = board.malformed();
     board.TakeAngles();
     board.KeepAngles(true);
-    // Waited for at the board's pace, not this machine's clock: a board that runs slow
-    // but steadily (a simulated one on a loaded machine) is waited for; one silent for
-    // 2 s, or whose sweep outlasts twice its length counted in its own samples, is not.
-    const double expected_s = cycles / frequency_hz + 1.0;
-    const auto most_samples =
-        static_cast<std::size_t>(std::ceil((2 * expected_s + 2) * *rate_hz));
+    // Followed at the board's pace (host::Patience): at most twice the sweep's own
+    // length in the board's time, and the board may not fall silent.
+    const double expected_s = cycles / frequency_hz + 2 * sweep.rest_100ms / 10.0;
     std::vector<double> motor, joint;
-    auto last_heard = std::chrono::steady_clock::now();
-    std::uint32_t last_tick = board.status().tick;
-    bool sweeping_seen = false, done = false;
-    while (!done) {
-      if (!board.Poll(100, &why)) throw Failure(why);
-      const auto now = std::chrono::steady_clock::now();
-      const std::size_t before = motor.size();
+    bool sweeping_seen = false;
+    const auto finished = [&] {
       for (const host::AngleSample& a : board.TakeAngles()) {
         motor.push_back(a.motor_rad);
         joint.push_back(a.joint_rad);
       }
-      const host::BoardStatus& s = board.status();
-      if (motor.size() != before || s.tick != last_tick) last_heard = now;
-      last_tick = s.tick;
-      if (s.state == BoardState::kFault) {
-        throw Failure(Exit::kFaulted, who + " faulted during the sweep: fault " +
-                                          host::DescribeFault(s.fault));
+      const BoardState state = board.status().state;
+      if (state == BoardState::kCalibrating) sweeping_seen = true;
+      return state == BoardState::kFault || (sweeping_seen && state == BoardState::kIdle);
+    };
+    const host::Patience patience{
+        std::chrono::milliseconds(static_cast<long>(2000 * expected_s) + 2000)};
+    host::WaitEnd end{};
+    if (!board.Await(finished, patience, &end, &why)) {
+      switch (end) {
+        case host::WaitEnd::kLinkFailed:
+          throw Failure(why);
+        case host::WaitEnd::kInterrupted:
+          throw Failure(Exit::kFailure, "interrupted");
+        case host::WaitEnd::kSilent:
+          throw Failure(Exit::kNoAnswer,
+                        who + " went silent during the sweep (" + why + ")");
+        case host::WaitEnd::kBoardTime:
+          throw Failure(Exit::kNoAnswer, who +
+                                             "'s sweep did not finish within twice its "
+                                             "length (" +
+                                             why + ")");
       }
-      if (now - last_heard > std::chrono::seconds(2)) {
-        throw Failure(Exit::kNoAnswer, who + " went silent during the sweep");
-      }
-      if (motor.size() > most_samples) {
-        throw Failure(Exit::kNoAnswer,
-                      who + "'s sweep did not finish within twice its length (" +
-                          std::to_string(static_cast<int>(2 * expected_s)) + " s)");
-      }
-      if (s.state == BoardState::kCalibrating) sweeping_seen = true;
-      done = sweeping_seen && s.state == BoardState::kIdle;
+    }
+    if (board.status().state == BoardState::kFault) {
+      throw Failure(Exit::kFaulted, who + " faulted during the sweep: fault " +
+                                        host::DescribeFault(board.status().fault));
     }
     board.KeepAngles(false);
     // A lost sample shifts every later one in time: the lag fit would read it as lag.

@@ -18,19 +18,19 @@ namespace {
 using protocol::CommandCode;
 using protocol::CommandOutcomeCode;
 
-// A board's heartbeat (its state and latched fault) within timeout_ms; false if none.
+// A board's heartbeat (its state and latched fault); false if it says nothing for
+// timeout_ms.
 bool AwaitHeartbeat(host::BoardClient& board, int timeout_ms, std::string* why) {
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-  while (!board.status().heard && std::chrono::steady_clock::now() < deadline) {
-    if (!board.Poll(20, why)) return false;
+  host::WaitEnd end{};
+  const std::chrono::milliseconds timeout{timeout_ms};
+  if (board.Await([&] { return board.status().heard; }, {timeout, timeout}, &end, why)) {
+    return true;
   }
-  if (!board.status().heard) {
+  if (end == host::WaitEnd::kSilent) {
     *why = "node " + std::to_string(board.node()) + " sent no heartbeat within " +
            std::to_string(timeout_ms) + " ms";
-    return false;
   }
-  return true;
+  return false;
 }
 
 // Sends `code` to every node and prints what each answered. Once all were asked, throws

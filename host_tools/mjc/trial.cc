@@ -31,6 +31,8 @@ Exit ExitOf(host::TrialEnd end) {
       return Exit::kRefused;
     case host::TrialEnd::kFaulted:
       return Exit::kFaulted;
+    case host::TrialEnd::kInterrupted:
+      return Exit::kFailure;
   }
   return Exit::kFailure;
 }
@@ -98,16 +100,13 @@ void AddTrial(CLI::App& app) {
       config.frequency_mHz = static_cast<std::uint16_t>(std::lround(frequency_hz * 1000));
       config.repetitions = static_cast<std::uint8_t>(reps);
       config.rest_100ms = static_cast<std::uint8_t>(std::lround(rest_s * 10));
-      const double timeout = (2 * rest_s + reps / frequency_hz) * 3 + 10;
       const std::uint64_t broken_before = board.incomplete_windows();
-      const auto trial = host::RunBoardTrial(
-          board, config,
-          [&](const host::BoardWindow& w) {
+      const auto trial =
+          host::RunBoardTrial(board, config, [&](const host::BoardWindow& w) {
             std::fprintf(stderr, "\r[trial %zu/%zu, %.0f°] repetition %u/%d %s   ", t + 1,
                          plan.size(), plan[t], w.repetition + 1, reps,
                          w.motion == Motion::kFlexion ? "flexion" : "extension");
-          },
-          timeout);
+          });
       std::fputc('\n', stderr);
       if (!trial.completed) {
         throw Failure(ExitOf(trial.end), "node " + std::to_string(node) + ", trial " +

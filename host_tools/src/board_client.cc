@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <utility>
 
 namespace mjc::host {
@@ -22,20 +23,75 @@ BoardClient::BoardClient(CanLink* link, std::uint8_t node, HostHeartbeats heartb
   link_->SetFilters({&only_node, 1}, &why);
 }
 
+bool BoardClient::Await(const std::function<bool()>& done, const Patience& patience,
+                        WaitEnd* end, std::string* why) {
+  const auto end_with = [&](WaitEnd e, std::string what) {
+    *end = e;
+    *why = std::move(what);
+    return false;
+  };
+  auto heard_at = now_();
+  auto beat_at = heard_at;
+  std::uint64_t frames_seen = frames_;
+  std::uint64_t heartbeats_seen = heartbeats_heard_;
+  std::optional<std::uint32_t> first_tick;
+  const auto board_ticks =
+      static_cast<std::uint64_t>(patience.board.count()) * protocol::kBoardTickHz / 1000u;
+  for (;;) {
+    if (done()) return true;
+    if (interrupted()) return end_with(WaitEnd::kInterrupted, "interrupted");
+    if (!Poll(20, why)) {
+      *end = WaitEnd::kLinkFailed;
+      return false;
+    }
+    if (done()) return true;
+    const auto now = now_();
+    if (frames_ != frames_seen) {
+      frames_seen = frames_;
+      heard_at = now;
+    }
+    if (heartbeats_heard_ != heartbeats_seen) {
+      heartbeats_seen = heartbeats_heard_;
+      beat_at = now;
+      if (!first_tick) first_tick = status_.tick;
+      if (board_ticks != 0 && status_.tick - *first_tick > board_ticks) {
+        return end_with(WaitEnd::kBoardTime, "node " + std::to_string(node_) + " ran " +
+                                                 std::to_string(patience.board.count()) +
+                                                 " ms of its own time without it");
+      }
+    }
+    if (now - heard_at > patience.silence) {
+      return end_with(WaitEnd::kSilent,
+                      "node " + std::to_string(node_) + " sent nothing for " +
+                          std::to_string(patience.silence.count()) + " ms");
+    }
+    // Talking without a heartbeat: its clock cannot be read, so the board time bound
+    // could never end the wait. Far longer than any heartbeat gap of a board that sends
+    // them, however slowly it is simulated.
+    if (now - beat_at > std::max(patience.silence, kHeartbeatSilence)) {
+      return end_with(WaitEnd::kSilent, "node " + std::to_string(node_) +
+                                            " sent no heartbeat for " +
+                                            std::to_string(kHeartbeatSilence.count()) +
+                                            " ms (is its HeartbeatHz 0?)");
+    }
+  }
+}
+
 std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int timeout_ms,
                                                        std::string* why) {
   const std::uint8_t seq = ++sequence_;
   last_result_.reset();
   if (!Send(protocol::Command{code, seq}, why)) return std::nullopt;
-  const auto deadline = now_() + std::chrono::milliseconds(timeout_ms);
-  while (now_() < deadline) {
-    if (!Poll(10, why)) return std::nullopt;
-    if (last_result_ && last_result_->sequence == seq && last_result_->code == code) {
-      return last_result_->outcome;
-    }
+  const auto answered = [&] {
+    return last_result_ && last_result_->sequence == seq && last_result_->code == code;
+  };
+  const std::chrono::milliseconds timeout{timeout_ms};
+  WaitEnd end{};
+  if (Await(answered, {timeout, timeout}, &end, why)) return last_result_->outcome;
+  if (end == WaitEnd::kSilent || end == WaitEnd::kBoardTime) {
+    *why = "node " + std::to_string(node_) + " did not answer the command within " +
+           std::to_string(timeout_ms) + " ms";
   }
-  *why = "node " + std::to_string(node_) + " did not answer the command within " +
-         std::to_string(timeout_ms) + " ms";
   return std::nullopt;
 }
 
@@ -43,22 +99,24 @@ std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
                                                    std::string* why) {
   last_param_.reset();
   if (!Send(ParamRead{id}, why)) return std::nullopt;
-  const auto deadline = now_() + std::chrono::milliseconds(timeout_ms);
-  while (now_() < deadline) {
-    if (!Poll(10, why)) return std::nullopt;
-    if (last_param_ && last_param_->id == id) {
-      if (last_param_->status != ParamStatus::kOk) {
-        *why = "node " + std::to_string(node_) + " answered parameter " +
-               std::to_string(static_cast<int>(id)) + " with status " +
-               std::to_string(static_cast<int>(last_param_->status));
-        return std::nullopt;
-      }
-      return last_param_->value;
+  const auto answered = [&] { return last_param_ && last_param_->id == id; };
+  const std::chrono::milliseconds timeout{timeout_ms};
+  WaitEnd end{};
+  if (!Await(answered, {timeout, timeout}, &end, why)) {
+    if (end == WaitEnd::kSilent || end == WaitEnd::kBoardTime) {
+      *why = "node " + std::to_string(node_) +
+             " did not answer a parameter read within " + std::to_string(timeout_ms) +
+             " ms";
     }
+    return std::nullopt;
   }
-  *why = "node " + std::to_string(node_) + " did not answer a parameter read within " +
-         std::to_string(timeout_ms) + " ms";
-  return std::nullopt;
+  if (last_param_->status != ParamStatus::kOk) {
+    *why = "node " + std::to_string(node_) + " answered parameter " +
+           std::to_string(static_cast<int>(id)) + " with status " +
+           std::to_string(static_cast<int>(last_param_->status));
+    return std::nullopt;
+  }
+  return last_param_->value;
 }
 
 bool BoardClient::Poll(int timeout_ms, std::string* why) {
@@ -135,6 +193,7 @@ bool BoardClient::AcceptWindowPart(int part) {
 
 void BoardClient::Handle(const CanFrame& f) {
   if (NodeOf(f.id) != node_) return;
+  if (SentByBoard(FunctionOf(f.id))) ++frames_;
   const auto ok = [this](DecodeError e) {
     if (e == DecodeError::kOk) return true;
     if (e != DecodeError::kWrongFunction) ++malformed_;
@@ -154,6 +213,7 @@ void BoardClient::Handle(const CanFrame& f) {
     case Function::kHeartbeat: {
       Heartbeat h;
       if (!ok(Decode(f, &h))) return;
+      ++heartbeats_heard_;
       status_.heard = true;
       status_.state = h.state;
       status_.calibrated = h.calibrated;

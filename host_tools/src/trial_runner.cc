@@ -8,9 +8,14 @@ namespace mjc::host {
 
 using namespace mjc::protocol;
 
+std::chrono::milliseconds TrialBoardTime(const TrialConfig& config) {
+  const double frequency_hz = config.frequency_mHz / 1000.0;
+  const double seconds = config.repetitions / frequency_hz + 2 * config.rest_100ms / 10.0;
+  return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1000.0 + 0.5));
+}
+
 BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
-                         const std::function<void(const BoardWindow&)>& progress,
-                         double timeout_s) {
+                         const std::function<void(const BoardWindow&)>& progress) {
   BoardTrial out;
   const auto fail = [&out](TrialEnd end, std::string why) {
     out.end = end;
@@ -22,43 +27,50 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
   if (!board.Send(config, &why)) return fail(TrialEnd::kLinkFailed, why);
   const auto outcome = board.Command(CommandCode::kStartTrial, 1000, &why);
   if (!outcome) {
+    if (board.interrupted()) return fail(TrialEnd::kInterrupted, why);
     return fail(board.link_failed() ? TrialEnd::kLinkFailed : TrialEnd::kNoAnswer, why);
   }
   if (*outcome != CommandOutcomeCode::kAccepted) {
     return fail(TrialEnd::kRefused,
                 "the board refused the trial: " + std::string(OutcomeName(*outcome)));
   }
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  // Followed at the board's pace: done when the board says it is idle again after
+  // running. Its frames arrive in the order it sent them, and it sends a window's
+  // frames before the heartbeat that reports the trial over, so every window is in by
+  // then. Bounded by twice the trial's own length in the board's time, and by silence.
   bool running_seen = false;
-  auto idle_since = std::chrono::steady_clock::time_point{};
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (!board.Poll(20, &why)) return fail(TrialEnd::kLinkFailed, why);
+  const auto finished = [&] {
     for (BoardWindow& w : board.TakeWindows()) {
       if (progress) progress(w);
       out.windows.push_back(w);
     }
     const BoardState state = board.status().state;
-    if (state == BoardState::kFault) {
-      return fail(TrialEnd::kFaulted,
-                  "the board faulted: fault " + DescribeFault(board.status().fault));
-    }
     if (state == BoardState::kRunning) running_seen = true;
-    if (running_seen && state == BoardState::kIdle) {
-      // The last window leaves the board shortly after it goes idle: keep listening.
-      if (idle_since == std::chrono::steady_clock::time_point{})
-        idle_since = std::chrono::steady_clock::now();
-      if (std::chrono::steady_clock::now() - idle_since >
-          std::chrono::milliseconds(300)) {
-        out.end = TrialEnd::kCompleted;
-        out.completed = true;
-        return out;
-      }
+    return state == BoardState::kFault || (running_seen && state == BoardState::kIdle);
+  };
+  const Patience patience{2 * TrialBoardTime(config) + std::chrono::seconds(2)};
+  WaitEnd end{};
+  if (!board.Await(finished, patience, &end, &why)) {
+    switch (end) {
+      case WaitEnd::kLinkFailed:
+        return fail(TrialEnd::kLinkFailed, why);
+      case WaitEnd::kInterrupted:
+        return fail(TrialEnd::kInterrupted, why);
+      case WaitEnd::kSilent:
+        return fail(TrialEnd::kNoAnswer,
+                    "the board went silent during the trial (" + why + ")");
+      case WaitEnd::kBoardTime:
+        return fail(TrialEnd::kNoAnswer,
+                    "the trial did not finish within twice its length (" + why + ")");
     }
   }
-  return fail(TrialEnd::kNoAnswer, "the trial did not finish within " +
-                                       std::to_string(static_cast<int>(timeout_s)) +
-                                       " s");
+  if (board.status().state == BoardState::kFault) {
+    return fail(TrialEnd::kFaulted,
+                "the board faulted: fault " + DescribeFault(board.status().fault));
+  }
+  out.end = TrialEnd::kCompleted;
+  out.completed = true;
+  return out;
 }
 
 std::vector<BoardWindow> MiddleFlexions(const std::vector<BoardWindow>& windows,

@@ -77,8 +77,11 @@ check "and says why" grep -q "mjc clear: node 2 sent no heartbeat within 300 ms"
 # A cause that stays: the joint encoder flags an error (mjc sim's SIGUSR1) at rest.
 kill -USR1 "$sim"
 check "the board says the encoder flags an error" wait_for "$work/sim.err" "joint encoder error flag raised"
-"$mjc" monitor --iface vcan0 --node 1 --seconds 1 --interval-ms 200 >"$work/ef.out" 2>&1
-check "the board latched fault 101" grep -q "fault 101 (joint encoder error flag)" "$work/ef.out"
+"$mjc" monitor --iface vcan0 --node 1 --interval-ms 200 >"$work/ef.out" 2>&1 &
+monitor=$!
+check "the board latched fault 101" wait_for "$work/ef.out" "fault 101 (joint encoder error flag)"
+kill -INT "$monitor"
+wait "$monitor"
 "$mjc" clear --iface vcan0 --node 1 >"$work/refused.out" 2>"$work/refused.err"
 status=$?
 check "mjc clear while the cause is present exits 4 (exit $status)" test "$status" -eq 4

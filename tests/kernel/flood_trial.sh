@@ -13,14 +13,15 @@ mjc=$1
 work=$(mktemp -d)
 frames=20000
 fail() { echo "FAIL $*"; tail -n 20 "$work"/*.err "$work"/*.out 2>/dev/null; exit 1; }
+. "$(dirname "$0")/checks.sh"
 
 # The plant's own slack (sim_host/params/default.json), so no sweep is needed.
 cat >"$work/cal.json" <<'JSON'
 {"c_right_deg": 1.1001, "c_left_deg": -0.8995, "alpha": 1.0, "sea_stiffness_Nm_per_rad": 0.63, "joint_zero_count": 0}
 JSON
-"$mjc" sim --iface vcan0 --node 1 --subject subject1 --speed 1 --seconds 120 2>"$work/sim.err" &
+"$mjc" sim --iface vcan0 --node 1 --subject subject1 2>"$work/sim.err" &
 sim=$!
-sleep 0.5
+wait_for "$work/sim.err" "mjc sim: node 1 on vcan0" || fail "the simulated board did not come up"
 "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 1 >"$work/cal.out" 2>&1 ||
   fail "calibration upload"
 
@@ -34,7 +35,6 @@ gen2=$!
   fail "mjc trial under the flood"
 wait "$gen1" "$gen2"
 end=$(date +%s.%N)
-sleep 0.5
 kill -INT "$sim"
 wait "$sim"
 

@@ -15,9 +15,9 @@ count_receivers() {
   done
 }
 
-wait_receivers() {  # COUNT: wait (at most 10 s) until at least COUNT are registered
+wait_receivers() {  # COUNT: wait until at least COUNT are registered (cap as wait_for)
   local i
-  for ((i = 0; i < 200; i++)); do
+  for ((i = 0; i < ${MJC_WAIT_CAP_S:-300} * 20; i++)); do
     count_receivers
     ((receivers >= $1)) && return 0
     sleep 0.05

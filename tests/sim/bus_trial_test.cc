@@ -160,7 +160,7 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
   config.repetitions = 5;
   config.rest_100ms = 5;
   run.trial = host::RunBoardTrial(
-      client, config, [&](const host::BoardWindow&) { ++run.progress_lines; }, 120.0);
+      client, config, [&](const host::BoardWindow&) { ++run.progress_lines; });
   stop = true;
   board_thread.join();
   run.host_malformed = client.malformed();

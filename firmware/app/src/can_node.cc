@@ -148,6 +148,8 @@ CommandOutcomeCode Wire(CommandResult r) { return static_cast<CommandOutcomeCode
 static_assert(static_cast<int>(CommandResult::kRefusedBusy) ==
               static_cast<int>(CommandOutcomeCode::kRefusedBusy));
 static_assert(static_cast<int>(AppState::kFault) == static_cast<int>(BoardState::kFault));
+// The host reads the board's clock off the heartbeat's tick at this rate.
+static_assert(ControlConfig{}.tick_hz == kBoardTickHz);
 
 }  // namespace
 

@@ -5,6 +5,7 @@
 // summaries reassembled from their five frames, faults), and the host's heartbeat that
 // lets the board stop a motion when this host goes away. Used by mjc trial, calibrate,
 // cal and monitor.
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -50,6 +51,30 @@ struct AngleSample {
 // two heartbeats may be lost.
 inline constexpr std::chrono::milliseconds kHostHeartbeatPeriod{100};
 
+// How long a wait for a board may last, measured by the board rather than by this
+// machine's clock. A real board keeps real time, so for a lab both bounds are wall
+// time; a simulated board on a loaded machine may run slower than real time, and is
+// then waited for as long as it keeps talking and has not used up its own time.
+struct Patience {
+  // Board time the wait may take, read off its heartbeat's tick counter (counted from
+  // the first heartbeat the wait sees); 0 = no bound beyond silence.
+  std::chrono::milliseconds board{0};
+  // Wall time without a single frame from the node, after which it is taken as gone.
+  std::chrono::milliseconds silence{3000};
+};
+
+// A board that talks but sends no heartbeat for this long is taken as silent: the
+// tools read its state and its clock from the heartbeat.
+inline constexpr std::chrono::milliseconds kHeartbeatSilence{10000};
+
+// Why a bounded wait ended without what it waited for.
+enum class WaitEnd : std::uint8_t {
+  kSilent = 1,       // no frame from the node for Patience::silence
+  kBoardTime = 2,    // the board's clock advanced Patience::board
+  kLinkFailed = 3,   // this side could not send or receive
+  kInterrupted = 4,  // the interrupt flag (BoardClient::SetInterrupt) was raised
+};
+
 enum class HostHeartbeats : std::uint8_t {
   kOff = 0,   // the board is not supervised by this client
   kSend = 1,  // a HostHeartbeat every kHostHeartbeatPeriod while the client polls
@@ -70,8 +95,9 @@ class BoardClient {
               HostHeartbeats heartbeats = HostHeartbeats::kOff,
               Clock now = &std::chrono::steady_clock::now);
 
-  // Sends a command and waits for its CommandResult: nullopt when it cannot be sent or
-  // the board does not answer within timeout_ms (then *why says which).
+  // Sends a command and waits for its CommandResult: nullopt when it cannot be sent, or
+  // the board does not answer within timeout_ms (then *why says which). The timeout is
+  // board time while the board talks, and wall-clock silence otherwise (Patience).
   std::optional<protocol::CommandOutcomeCode> Command(protocol::CommandCode code,
                                                       int timeout_ms, std::string* why);
 
@@ -84,8 +110,8 @@ class BoardClient {
     return false;
   }
 
-  // Reads a parameter: nullopt when the board does not answer, or answers with a status
-  // other than kOk (then *why says which).
+  // Reads a parameter: nullopt when the board does not answer (timeout_ms as for
+  // Command), or answers with a status other than kOk (then *why says which).
   std::optional<std::int32_t> ReadParam(protocol::ParamId id, int timeout_ms,
                                         std::string* why);
 
@@ -93,6 +119,17 @@ class BoardClient {
   // timeout, sending heartbeats meanwhile when they are on. False only when the link
   // failed (then *why says how); a quiet bus is not a failure.
   bool Poll(int timeout_ms, std::string* why);
+
+  // The wait loop every caller shares: Poll until `done()` holds (true), or until the
+  // patience runs out, the link fails or the interrupt flag is raised (false, with
+  // *end and *why saying which). `done` may take what arrived (windows, samples).
+  bool Await(const std::function<bool()>& done, const Patience& patience, WaitEnd* end,
+             std::string* why);
+
+  // Makes every wait return (WaitEnd::kInterrupted) once *flag is true: a signal
+  // handler's flag, so a tool can stop what it started.
+  void SetInterrupt(const std::atomic<bool>* flag) { interrupt_ = flag; }
+  bool interrupted() const { return interrupt_ != nullptr && interrupt_->load(); }
 
   // Windows completed since the last call.
   std::vector<BoardWindow> TakeWindows();
@@ -108,6 +145,10 @@ class BoardClient {
   // a failed Command or ReadParam from a board that did not answer.
   bool link_failed() const { return link_failed_; }
   const BoardStatus& status() const { return status_; }
+  // Frames this node sent (not a host's frames to it) so far, and of those the
+  // heartbeats: what a wait watches for signs of life and for the board's own clock.
+  std::uint64_t frames() const { return frames_; }
+  std::uint64_t heartbeats() const { return heartbeats_heard_; }
   // Frames of this node the codec refused.
   std::uint64_t malformed() const { return malformed_; }
   // Windows dropped because a part was lost, malformed or out of order (each counted
@@ -152,6 +193,9 @@ class BoardClient {
   std::vector<AngleSample> angles_;
   std::optional<protocol::CommandResult> last_result_;
   std::optional<protocol::ParamValue> last_param_;
+  std::uint64_t frames_ = 0;
+  std::uint64_t heartbeats_heard_ = 0;
+  const std::atomic<bool>* interrupt_ = nullptr;
   std::uint64_t malformed_ = 0;
   std::uint64_t incomplete_windows_ = 0;
   bool link_failed_ = false;

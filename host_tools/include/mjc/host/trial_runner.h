@@ -2,6 +2,7 @@
 // board is idle again, and collect its window summaries.
 #pragma once
 
+#include <chrono>
 #include <functional>
 #include <string>
 #include <vector>
@@ -13,10 +14,11 @@ namespace mjc::host {
 // How a trial ended.
 enum class TrialEnd : std::uint8_t {
   kCompleted = 0,
-  kLinkFailed = 1,  // the host could not send or receive
-  kNoAnswer = 2,    // the board did not answer the start, or did not finish in time
-  kRefused = 3,     // the board refused the start
-  kFaulted = 4,     // the board faulted during the trial
+  kLinkFailed = 1,   // the host could not send or receive
+  kNoAnswer = 2,     // the board did not answer the start, or did not finish in time
+  kRefused = 3,      // the board refused the start
+  kFaulted = 4,      // the board faulted during the trial
+  kInterrupted = 5,  // the client's interrupt flag was raised (a signal)
 };
 
 struct BoardTrial {
@@ -26,10 +28,15 @@ struct BoardTrial {
   std::string error;       // why it did not complete
 };
 
-// `progress` gets a line per completed window. timeout_s bounds the wall time.
+// How long the trial runs on the board: its repetitions and the rests before and
+// after them.
+std::chrono::milliseconds TrialBoardTime(const protocol::TrialConfig& config);
+
+// `progress` gets each completed window. The wait follows the board's pace (see
+// Patience): at most twice the trial's own length in board time, and the board may not
+// fall silent for longer than the default silence.
 BoardTrial RunBoardTrial(BoardClient& board, const protocol::TrialConfig& config,
-                         const std::function<void(const BoardWindow&)>& progress,
-                         double timeout_s);
+                         const std::function<void(const BoardWindow&)>& progress);
 
 // The paper's analysed flexions: the middle three of `repetitions`.
 std::vector<BoardWindow> MiddleFlexions(const std::vector<BoardWindow>& windows,

@@ -176,6 +176,12 @@ enum class ParamStatus : std::uint8_t {
 };
 constexpr bool ValidEnumValue(ParamStatus s) { return static_cast<std::uint8_t>(s) <= 5; }
 
+// The board's clock as the Heartbeat's `tick` counts it: control ticks at the board's
+// 10 kHz (ControlConfig's default; a test in the app checks the two agree). The host
+// measures the board's own progress with it, so its waits follow a board that runs
+// slower than real time (a simulated one on a loaded machine).
+inline constexpr std::uint32_t kBoardTickHz = 10000;
+
 // Energies travel in Q7.24 J (±128 J, 0.06 µJ): a window's energy is millijoules.
 using WireEnergy = Fixed<Joule, 24>;
 
@@ -378,5 +384,24 @@ using AllMessages =
                ParamWrite, ParamRead, ParamValue, TelemetryAngles, TelemetryTorque,
                TelemetryPower, TelemetryEnergy, TelemetryControl, Heartbeat,
                HostHeartbeat>;
+
+namespace detail {
+template <class... M>
+constexpr bool SentByBoardIn(std::uint8_t function, const std::tuple<M...>*) {
+  return ((static_cast<std::uint8_t>(Message<M>::kFunction) == function &&
+           Message<M>::kSender == Sender::kBoard) ||
+          ...);
+}
+}  // namespace detail
+
+// True for the function codes a board sends (its messages and its ISO-TP channel): a
+// frame with one of these and a node's id is a sign of that board's life, where a
+// host's frame to it (another tool's command or heartbeat) is not.
+constexpr bool SentByBoard(std::uint8_t function) {
+  return function == static_cast<std::uint8_t>(Function::kIsoTpFromBoard) ||
+         detail::SentByBoardIn(function, static_cast<const AllMessages*>(nullptr));
+}
+static_assert(SentByBoard(static_cast<std::uint8_t>(Function::kHeartbeat)) &&
+              !SentByBoard(static_cast<std::uint8_t>(Function::kHostHeartbeat)));
 
 }  // namespace mjc::protocol
