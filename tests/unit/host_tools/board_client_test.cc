@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <initializer_list>
 #include <memory>
@@ -227,6 +228,140 @@ TEST_F(HostHeartbeatCadence, NoneWhenOff) {
   ASSERT_TRUE(quiet.Poll(1000, &why_)) << why_;
   EXPECT_TRUE(Heartbeats().empty());
   EXPECT_EQ(link_.now - start_, std::chrono::milliseconds(1000));
+}
+
+// ---------------------------------------------------------------------------------
+// Waits at the board's pace (Await): a board on a simulated clock that runs at
+// `board_rate` board seconds per wall second and sends a frame every 100 ms of its own
+// time — its heartbeat (carrying its tick) or, with heartbeats off, its angles — until
+// `silent_after` of wall time.
+
+class PacedBoardLink final : public CanLink {
+ public:
+  using Time = std::chrono::steady_clock::time_point;
+  Time now{};
+  double board_rate = 1.0;
+  std::chrono::milliseconds silent_after = std::chrono::hours(1);
+  bool heartbeats = true;
+  // Sent instead of the board's frames: a host's heartbeat to the node (not the board).
+  bool only_host_frames = false;
+
+  std::uint32_t BoardTick(Time t) const {
+    const double wall_ms = std::chrono::duration<double, std::milli>(t - Time{}).count();
+    return static_cast<std::uint32_t>(wall_ms * board_rate * 10.0);  // 10 kHz
+  }
+
+ private:
+  bool DoSend(const protocol::CanFrame&, std::string*) override { return true; }
+  ReceiveResult DoReceive(int timeout_ms, std::string*) override {
+    const auto interval = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double, std::milli>(100.0 / board_rate));
+    const Time until = now + std::chrono::milliseconds(timeout_ms);
+    if (next_ > until || next_ - Time{} >= silent_after) {
+      now = until;
+      return {ReceiveStatus::kTimeout, {}};
+    }
+    now = std::max(now, next_);
+    next_ += interval;
+    ReceiveResult r;
+    r.status = ReceiveStatus::kFrame;
+    if (only_host_frames) {
+      r.received.frame = protocol::Encode(protocol::HostHeartbeat{1}, kNode);
+    } else if (heartbeats) {
+      protocol::Heartbeat h;
+      h.state = protocol::BoardState::kRunning;
+      h.tick = BoardTick(now);
+      r.received.frame = protocol::Encode(h, kNode);
+    } else {
+      r.received.frame = protocol::Encode(protocol::TelemetryAngles{}, kNode);
+    }
+    return r;
+  }
+  bool DoSetFilters(std::span<const IdFilter>, std::string*) override { return true; }
+  Time next_{};
+};
+
+class AwaitAtTheBoardsPace : public ::testing::Test {
+ protected:
+  // Waits with `patience` until the board's clock shows `board_s` (never, when 0).
+  bool AwaitBoardTime(double board_s, Patience patience) {
+    const auto until = static_cast<std::uint32_t>(board_s * 10000);
+    return client_.Await([&] { return board_s > 0 && client_.status().tick >= until; },
+                         patience, &end_, &why_);
+  }
+  double WallSeconds() const {
+    return std::chrono::duration<double>(link_.now - PacedBoardLink::Time{}).count();
+  }
+
+  PacedBoardLink link_;
+  BoardClient client_{&link_, kNode, HostHeartbeats::kOff, [this] { return link_.now; }};
+  WaitEnd end_{};
+  std::string why_;
+};
+
+TEST_F(AwaitAtTheBoardsPace, ASlowBoardIsWaitedForAsLongAsItTalks) {
+  // A tenth of real time: 5 s of its time take 50 s of this machine's, far beyond both
+  // bounds were they wall time.
+  link_.board_rate = 0.1;
+  ASSERT_TRUE(AwaitBoardTime(5.0, {std::chrono::seconds(6), std::chrono::seconds(3)}))
+      << why_;
+  EXPECT_NEAR(WallSeconds(), 50.0, 1.1);
+}
+
+TEST_F(AwaitAtTheBoardsPace, TheBoardsOwnTimeBoundsIt) {
+  ASSERT_FALSE(AwaitBoardTime(0, {std::chrono::seconds(2), std::chrono::seconds(3)}));
+  EXPECT_EQ(end_, WaitEnd::kBoardTime);
+  // Counted from the first heartbeat the wait saw (at 0), ended by the first one past
+  // 2 s of board time.
+  EXPECT_NEAR(WallSeconds(), 2.1, 0.001);
+  EXPECT_NE(why_.find("2000 ms of its own time"), std::string::npos) << why_;
+}
+
+TEST_F(AwaitAtTheBoardsPace, AFastBoardEndsItInItsTimeNotOurs) {
+  link_.board_rate = 4.0;
+  ASSERT_FALSE(AwaitBoardTime(0, {std::chrono::seconds(2), std::chrono::seconds(3)}));
+  EXPECT_EQ(end_, WaitEnd::kBoardTime);
+  EXPECT_NEAR(WallSeconds(), 2.1 / 4.0, 0.001);
+}
+
+TEST_F(AwaitAtTheBoardsPace, ABoardThatFallsSilentEndsIt) {
+  link_.silent_after = std::chrono::seconds(1);
+  ASSERT_FALSE(AwaitBoardTime(0, {std::chrono::seconds(60), std::chrono::seconds(3)}));
+  EXPECT_EQ(end_, WaitEnd::kSilent);
+  // The last frame at 0.9 s, then 3 s of silence (to the 20 ms poll).
+  EXPECT_NEAR(WallSeconds(), 3.9, 0.021);
+}
+
+TEST_F(AwaitAtTheBoardsPace, AHostsFramesToTheNodeAreNoSignOfItsLife) {
+  link_.only_host_frames = true;
+  ASSERT_FALSE(AwaitBoardTime(0, {std::chrono::seconds(60), std::chrono::seconds(3)}));
+  EXPECT_EQ(end_, WaitEnd::kSilent);
+  EXPECT_NEAR(WallSeconds(), 3.0, 0.021);
+}
+
+TEST_F(AwaitAtTheBoardsPace, ABoardWithoutHeartbeatsIsSilentOnceTheyStayAway) {
+  // Its clock cannot be read, so only the absence of heartbeats can end the wait.
+  link_.heartbeats = false;
+  ASSERT_FALSE(AwaitBoardTime(0, {std::chrono::seconds(2), std::chrono::seconds(3)}));
+  EXPECT_EQ(end_, WaitEnd::kSilent);
+  EXPECT_NEAR(WallSeconds(), std::chrono::duration<double>(kHeartbeatSilence).count(),
+              0.101);
+  EXPECT_NE(why_.find("no heartbeat"), std::string::npos) << why_;
+}
+
+TEST_F(AwaitAtTheBoardsPace, TheInterruptFlagEndsItAtOnce) {
+  std::atomic<bool> interrupt{false};
+  client_.SetInterrupt(&interrupt);
+  int polls = 0;
+  const bool done = client_.Await(
+      [&] {
+        if (++polls == 3) interrupt = true;
+        return false;
+      },
+      {std::chrono::seconds(60), std::chrono::seconds(3)}, &end_, &why_);
+  ASSERT_FALSE(done);
+  EXPECT_EQ(end_, WaitEnd::kInterrupted);
+  EXPECT_EQ(polls, 3);
 }
 
 // ---------------------------------------------------------------------------------
