@@ -84,6 +84,9 @@ TrialResult RunTrial(double k_if, double b_if) {
   TrialResult res;
   double eta_sum = 0;
   const int ticks = 5 * 20000 + 2 * 5000 + 1000;
+  // The tick's counter goes on from an earlier trial on the same (static) tick: truth
+  // is indexed from this trial's first tick.
+  std::uint32_t first = 0;
   for (int i = 0; i < ticks; ++i) {
     if (i == 10) {
       tick.Arm(true);
@@ -92,6 +95,7 @@ TrialResult RunTrial(double k_if, double b_if) {
     plant.Step(motor, 1e-4);
     // Ground truth at tick i: τ·θ̇ with a central difference done one tick late below.
     const TickResult r = StepOf(tick, plant.Read(motor));
+    if (i == 0) first = r.telemetry.tick;
     truth_power[i] = 0;
     if (i > 0) truth_power[i - 1] = plant.torque() * (plant.theta - last_theta) / 1e-4;
     last_theta = plant.theta;
@@ -101,9 +105,9 @@ TrialResult RunTrial(double k_if, double b_if) {
       const WindowSummary& w = r.window;
       double load = 0, unload = 0;
       for (std::uint32_t t = w.start_tick; t < w.peak_tick; ++t)
-        load += truth_power[t] * 1e-4;
+        load += truth_power[t - first] * 1e-4;
       for (std::uint32_t t = w.peak_tick; t < w.end_tick; ++t)
-        unload += truth_power[t] * 1e-4;
+        unload += truth_power[t - first] * 1e-4;
       const double e1 = std::fabs(w.loading.ToDouble() - load) / std::fabs(load);
       const double e2 = std::fabs(w.unloading.ToDouble() - unload) / std::fabs(load);
       const double eta = (1 - std::fabs(unload) / load) * 100;
