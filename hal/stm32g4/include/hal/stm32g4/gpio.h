@@ -46,7 +46,7 @@ struct PinConfig {
 };
 
 constexpr Address PortAddress(Port port) {
-  return gpio::kBlocks[static_cast<std::size_t>(port)].base;
+  return gpio::kPortBases[static_cast<std::size_t>(port)];
 }
 
 // Configures one pin (read-modify-write of its fields only; the port's clock must be on).

@@ -81,7 +81,13 @@ inline constexpr BlockDef kBlocks[] = {
 static_assert(WellFormed(kBlocks[0]));
 inline constexpr std::size_t kPortCount = std::size(kBlocks);
 
-consteval Address PortBase(std::size_t port) { return kBlocks[port].base; }
+// The ports' bases alone, for indexing at run time (indexing kBlocks itself would put
+// the whole description, names included, into the image).
+inline constexpr std::array<Address, kPortCount> kPortBases = [] {
+  std::array<Address, kPortCount> bases{};
+  for (std::size_t i = 0; i < kPortCount; ++i) bases[i] = kBlocks[i].base;
+  return bases;
+}();
 
 inline constexpr std::uint32_t kModer = OffsetOf(kBlocks[0], "MODER");
 inline constexpr std::uint32_t kOtyper = OffsetOf(kBlocks[0], "OTYPER");
