@@ -21,8 +21,8 @@ using testing::ScriptedSpace;
 constexpr Address kTim1 = 0x40012C00, kTim3 = 0x40000400, kSpi1 = 0x40013000;
 constexpr Address kGpioaBsrr = 0x48000018, kGpiobBsrr = 0x48000418;
 
-constexpr JointIoBlocks kBlocks{.joint_cs = {Port::kA, 4},
-                                .bridge_enable = {Port::kB, 12}};
+constexpr JointIoBlocks kBlocks{.joint_cs = At(Pin{Port::kA, 4}),
+                                .bridge_enable = At(Pin{Port::kB, 12})};
 using Io = Stm32g4JointIo<kBlocks>;
 static_assert(hal::JointIo<Io>);
 
@@ -114,7 +114,7 @@ void ModelSpi(ScriptedSpace& s, std::uint16_t answer) {
 TEST(As5047p, InitConfiguresMode1And16BitFrames) {
   ScriptedSpace s;
   ModelSpi(s, 0x1234);
-  As5047p<kSpi1, Pin{Port::kA, 4}> sensor;
+  As5047p<kSpi1, At(Pin{Port::kA, 4})> sensor;
   EXPECT_TRUE(sensor.Init());
   // CR1: CPHA (0), MSTR (2), BR = 100 (/32, 5:3), SSI (8), SSM (9); then SPE (6).
   EXPECT_EQ(s.WritesTo(kSpi1 + 0x00), (std::vector<std::uint32_t>{0u, 0x325u, 0x365u}));

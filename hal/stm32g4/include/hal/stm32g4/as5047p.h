@@ -46,10 +46,11 @@ inline constexpr std::uint32_t kAs5047pCsCycles =
     static_cast<std::uint32_t>((350ull * kSysclkHz + 999'999'999ull) / 1'000'000'000ull);
 static_assert(kAs5047pCsCycles == 60);
 
-template <Address kSpi, Pin kCs>
+template <Address kSpi, PortPin kCs, Address kDwt = dwt::kBase>
 class As5047p {
  public:
   using Cs = OutputPin<kCs>;
+  using Clock = CycleCounter<kDwt>;
 
   // SPI1's clock and SCK/MISO/MOSI must be set; the CS pin must be an output driven
   // high. Configures SPI1 (RM0440 §39.4.7 "Configuration of SPI": CR1 then CR2 with
@@ -68,7 +69,7 @@ class As5047p {
     // 16-bit frames (DS = 1111); FRXTH = 0: RXNE once 16 bits are in the RX FIFO.
     Write32(kSpi + kCr2, cr2::kDs.Value(0b1111));
     Write32(kSpi + kCr1, cr1 | cr1::kSpe.Bit());
-    cs_high_since_ = CycleCount();
+    cs_high_since_ = Clock::Now();
     ISR_Start();
     const bool done =
         WaitFor(kSpi + kSr, sr::kRxne.Bit() | sr::kBsy.Bit(), sr::kRxne.Bit(), kMaxPolls);
@@ -92,20 +93,20 @@ class As5047p {
       }
     }
     Cs::Set();
-    cs_high_since_ = CycleCount();
+    cs_high_since_ = Clock::Now();
     return frame;
   }
 
   // Lowers CS (t_CSn after the last rise) — the first half of ISR_Start(), so the
   // caller can spend t_L on other writes before ISR_Command().
   void ISR_Select() {
-    WaitCyclesSince(cs_high_since_, kAs5047pCsCycles);
+    Clock::WaitSince(cs_high_since_, kAs5047pCsCycles);
     Cs::Clear();
-    cs_low_since_ = CycleCount();
+    cs_low_since_ = Clock::Now();
   }
   // Sends the read command (t_L after ISR_Select()).
   void ISR_Command() {
-    WaitCyclesSince(cs_low_since_, kAs5047pCsCycles);
+    Clock::WaitSince(cs_low_since_, kAs5047pCsCycles);
     Write16(kSpi + spi1::kDr, kAs5047pReadAngle);
   }
   void ISR_Start() {

@@ -67,11 +67,21 @@ inline bool ReadPin(Pin pin) {
   return gpio::kId[pin.number & 15u].IsSet(Read32(PortAddress(pin.port) + gpio::kIdr));
 }
 
+// A pin by its port's register block address: what tick-path drivers take as a template
+// argument (so their pins, like their other blocks, may be placed elsewhere, e.g. in
+// RAM for an instruction-count image).
+struct PortPin {
+  Address port = 0;
+  std::uint8_t number = 0;  // 0..15
+  constexpr bool operator==(const PortPin&) const = default;
+};
+constexpr PortPin At(Pin pin) { return {PortAddress(pin.port), pin.number}; }
+
 // The same for a pin fixed at compile time: a constant address and value.
-template <Pin kPin>
+template <PortPin kPin>
 struct OutputPin {
   static_assert(kPin.number < 16);
-  static constexpr Address kBsrr = PortAddress(kPin.port) + gpio::kBsrr;
+  static constexpr Address kBsrr = kPin.port + gpio::kBsrr;
   static void Set() { Write32(kBsrr, gpio::kBs[kPin.number].Bit()); }
   static void Clear() { Write32(kBsrr, gpio::kBr[kPin.number].Bit()); }
   static void Write(bool high) { high ? Set() : Clear(); }

@@ -33,8 +33,9 @@ struct JointIoBlocks {
   Address bridge_timer = tim1::kBase;
   Address encoder_timer = tim3::kBase;
   Address joint_spi = spi1::kBase;
-  Pin joint_cs;       // the AS5047P's chip select (output, idle high)
-  Pin bridge_enable;  // the H-bridge's enable line (output, idle low)
+  PortPin joint_cs;                    // the AS5047P's chip select (output, idle high)
+  PortPin bridge_enable;               // the H-bridge's enable line (output, idle low)
+  Address cycle_counter = dwt::kBase;  // the DWT block (tick duration, SPI hold times)
 };
 
 template <JointIoBlocks kBlocks>
@@ -42,10 +43,13 @@ class Stm32g4JointIo {
  public:
   using Pwm = Stm32g4BridgePwm<kBlocks.bridge_timer>;
   using Encoder = Stm32g4QuadratureEncoder<kBlocks.encoder_timer>;
-  using JointEncoder = As5047p<kBlocks.joint_spi, kBlocks.joint_cs>;
+  using JointEncoder =
+      As5047p<kBlocks.joint_spi, kBlocks.joint_cs, kBlocks.cycle_counter>;
   using Enable = OutputPin<kBlocks.bridge_enable>;
+  using Clock = CycleCounter<kBlocks.cycle_counter>;
 
-  // After clocks and pins: the bridge disabled (enable low, both low sides on), the
+  // After clocks and pins (and on the chip: the DWT's counter is started here): the
+  // bridge disabled (enable low, both low sides on), the
   // encoder counting, the joint encoder's pipeline primed, then TIM1 started with its
   // update interrupt (its NVIC line is the caller's: EnableIrq(irq::kTim1Update, ...)).
   // False if the joint encoder's primer frame did not complete (the ticks will then
@@ -62,7 +66,7 @@ class Stm32g4JointIo {
 
   // The first thing the tick's interrupt does.
   void ISR_BeginTick() {
-    start_ = CycleCount();
+    start_ = Clock::Now();
     (void)Pwm::ISR_TakeUpdate();
   }
 
@@ -85,7 +89,7 @@ class Stm32g4JointIo {
       Pwm::ISR_Brake();
     }
     joint_.ISR_Command();
-    const std::uint32_t cycles = CycleCount() - start_;
+    const std::uint32_t cycles = Clock::Now() - start_;
     last_tick_cycles_.store(cycles, std::memory_order_relaxed);
     if (cycles > max_tick_cycles_.load(std::memory_order_relaxed)) {
       max_tick_cycles_.store(cycles, std::memory_order_relaxed);

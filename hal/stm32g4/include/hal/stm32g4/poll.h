@@ -28,13 +28,26 @@ inline void EnableCycleCounter() {
   const Address ctrl = dwt::kBase + dwt::kCtrl;
   Write32(ctrl, Read32(ctrl) | dwt::ctrl::kCyccntena.Bit());
 }
-inline std::uint32_t CycleCount() { return Read32(dwt::kBase + dwt::kCyccnt); }
 
-// Waits until `cycles` core cycles have passed since `since` (a CycleCount()); returns at
-// once if they already have. For the short hold times a device's datasheet asks for.
-inline void WaitCyclesSince(std::uint32_t since, std::uint32_t cycles) {
-  while (CycleCount() - since < cycles) {
+// The counter of the DWT block at kDwt (a template argument, so that a tick-path driver
+// can be built against a block placed in RAM, as its other registers).
+template <Address kDwt = dwt::kBase>
+struct CycleCounter {
+  static std::uint32_t Now() { return Read32(kDwt + dwt::kCyccnt); }
+  // Waits until `cycles` core cycles have passed since `since` (a Now()); returns at
+  // once if they already have. For the short hold times a device's datasheet asks for.
+  // Each pass of the loop takes at least one cycle, so `cycles` passes also end it: the
+  // wait is never shorter than asked, and it ends even where the counter does not count
+  // (halted by a debugger, or an emulator without a DWT).
+  static void WaitSince(std::uint32_t since, std::uint32_t cycles) {
+    for (std::uint32_t pass = 0; pass < cycles && Now() - since < cycles; ++pass) {
+    }
   }
+};
+
+inline std::uint32_t CycleCount() { return CycleCounter<>::Now(); }
+inline void WaitCyclesSince(std::uint32_t since, std::uint32_t cycles) {
+  CycleCounter<>::WaitSince(since, cycles);
 }
 
 }  // namespace mjc::stm32g4
