@@ -26,6 +26,7 @@ namespace mjc::board {
 inline constexpr stm32g4::JointIoBlocks kJointIoBlocks{
     .joint_cs = stm32g4::At(kJointCs), .bridge_enable = stm32g4::At(kBridgeEnable)};
 using JointIo = stm32g4::Stm32g4JointIo<kJointIoBlocks>;
+static_assert(hal::JointIo<JointIo>);
 
 // The board's CAN node id. Fixed for now; a later board revision reads it from
 // straps or the option bytes' user data.

@@ -68,7 +68,8 @@ FdcanResult Stm32g4Fdcan::Init(std::span<const CanFilter> filters) {
   Write32(kBase + kTxbc, txbc::kTfqm.Value(0));  // TX FIFO, not queue: sent in order
 
   // Interrupts: RX FIFO 0 group on line 0, protocol errors (bus-off) on line 1.
-  Write32(kBase + kIr, 0xFFFFFFFFu);  // stale flags (write 1 to clear)
+  // Stale flags of the enabled interrupts (write 1 to clear).
+  Write32(kBase + kIr, ir::kRf0n.Bit() | ir::kRf0l.Bit() | ir::kBo.Bit());
   Write32(kBase + kIe, ie::kRf0ne.Bit() | ie::kRf0le.Bit() | ie::kBoe.Bit());
   Write32(kBase + kIls, ils::kPerr.Bit());
   Write32(kBase + kIle, ile::kEint0.Bit() | ile::kEint1.Bit());

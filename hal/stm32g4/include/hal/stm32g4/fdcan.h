@@ -98,6 +98,11 @@ constexpr std::uint32_t CanLengthToDlc(std::uint32_t length) {
   return 15;
 }
 
+// Send() (main loop) writes the TX FIFO's put element and requests it: false when the
+// FIFO is full, and also for a frame no controller can send (length over 8 classic or 64
+// FD) — the caller must not offer such a frame again. An FD frame goes with bit-rate
+// switching; an FD length between the DLC steps is padded with zeros to the next step.
+// Receive(), TakeBusOff() and counters() are main-loop calls too.
 class Stm32g4Fdcan final : public hal::CanPort {
  public:
   static constexpr std::size_t kRxQueueFrames = 16;
