@@ -39,6 +39,11 @@ ClockResult ConfigureClocks() {
   EnableCycleCounter();
   const Address rcc_cr = rcc::kBase + rcc::kCr;
   const Address cfgr = rcc::kBase + rcc::kCfgr;
+  // A step that fails leaves SYSCLK on HSI16 and AHB back at /1 (16 MHz).
+  const auto fail = [cfgr](ClockResult result) {
+    Write32(cfgr, rcc::cfgr::kHpre.With(Read32(cfgr), kHpreDiv1));
+    return result;
+  };
 
   // 1. PWR's register clock, read back so the enable has taken effect before PWR is
   //    written (RM0440 §7.2.17, a peripheral is usable 2 cycles after its enable).
@@ -46,12 +51,17 @@ ClockResult ConfigureClocks() {
   SetBits(apb1enr1, rcc::apb1enr1::kPwren.Bit());
   (void)Read32(apb1enr1);
 
-  // 2. Range 1 boost, still on HSI16: clear PWR_CR5.R1MODE (RM0440 §6.1.5: boost is
-  //    needed above 150 MHz) and wait for the regulator (PWR_SR2.VOSF = 0).
+  // 2. RM0440 §6.1.5, from Range 1 normal to Range 1 boost: (1) the AHB prescaler
+  //    divides by 2 before the switch to the higher frequency (ST's HAL: "intermediate
+  //    step with HCLK prescaler 2 necessary before to go over 80 MHz"; HCLK is 8 MHz
+  //    meanwhile); (2) clear R1MODE; (3) raise the wait states; (4) switch; (5) after
+  //    ≥ 1 µs, the final AHB prescaler. Boost is needed above 150 MHz. Still on HSI16.
+  Write32(cfgr, rcc::cfgr::kHpre.With(Read32(cfgr), kHpreDiv2));
+  // PWR_CR5.R1MODE = 0, then wait for the regulator (PWR_SR2.VOSF = 0).
   const Address cr5 = pwr::kBase + pwr::kCr5;
   ClearBits(cr5, pwr::cr5::kR1mode.Bit());
   if (!WaitFor(pwr::kBase + pwr::kSr2, pwr::sr2::kVosf.Bit(), 0, kMaxPolls)) {
-    return ClockResult::kVoltageTimeout;
+    return fail(ClockResult::kVoltageTimeout);
   }
 
   // 3. Flash latency before the frequency rises (RM0440 §5.3.3: increase the wait states
@@ -63,20 +73,20 @@ ClockResult ConfigureClocks() {
                    flash::acr::kDcen.Bit());
   if (!WaitFor(acr, flash::acr::kLatency.Mask(),
                flash::acr::kLatency.Value(kFlashWaitStates), kMaxPolls)) {
-    return ClockResult::kFlashLatency;
+    return fail(ClockResult::kFlashLatency);
   }
 
   // 4. HSE (a crystal: HSEBYP stays 0), wait HSERDY (RM0440 §7.2.1).
   SetBits(rcc_cr, rcc::cr::kHseon.Bit());
   if (!WaitFor(rcc_cr, rcc::cr::kHserdy.Bit(), rcc::cr::kHserdy.Bit(), kMaxPolls)) {
-    return ClockResult::kHseTimeout;
+    return fail(ClockResult::kHseTimeout);
   }
 
   // 5. The PLL is configured only while it is off and unlocked (RM0440 §7.2.4): clear
   //    PLLON, wait PLLRDY = 0, program M/N/R/Q and the outputs, then PLLON, wait PLLRDY.
   ClearBits(rcc_cr, rcc::cr::kPllon.Bit());
   if (!WaitFor(rcc_cr, rcc::cr::kPllrdy.Bit(), 0, kMaxPolls)) {
-    return ClockResult::kPllTimeout;
+    return fail(ClockResult::kPllTimeout);
   }
   Write32(rcc::kBase + rcc::kPllcfgr,
           rcc::pllcfgr::kPllsrc.Value(kPllSrcHse) | rcc::pllcfgr::kPllm.Value(kPllM - 1) |
@@ -85,16 +95,13 @@ ClockResult ConfigureClocks() {
               rcc::pllcfgr::kPllq.Value(PllDivCode(kPllQ)) | rcc::pllcfgr::kPllqen.Bit());
   SetBits(rcc_cr, rcc::cr::kPllon.Bit());
   if (!WaitFor(rcc_cr, rcc::cr::kPllrdy.Bit(), rcc::cr::kPllrdy.Bit(), kMaxPolls)) {
-    return ClockResult::kPllTimeout;
+    return fail(ClockResult::kPllTimeout);
   }
 
-  // 6. AHB /2 before the switch to a frequency above 80 MHz (RM0440 §6.1.5 step 1 and
-  //    §7.2.7: the intermediate step keeps the current step within the regulator's
-  //    reach), then SYSCLK = PLLRCLK, wait SWS.
-  Write32(cfgr, rcc::cfgr::kHpre.With(Read32(cfgr), kHpreDiv2));
+  // 6. SYSCLK = PLLRCLK (HCLK 85 MHz through the /2 of step 2), wait SWS.
   Write32(cfgr, rcc::cfgr::kSw.With(Read32(cfgr), kSwPll));
   if (!WaitFor(cfgr, rcc::cfgr::kSws.Mask(), rcc::cfgr::kSws.Value(kSwPll), kMaxPolls)) {
-    return ClockResult::kSwitchTimeout;
+    return fail(ClockResult::kSwitchTimeout);
   }
 
   // 7. ≥ 1 µs at the intermediate frequency, then AHB /1 (170 MHz) and both APB /1.

@@ -56,7 +56,8 @@ TEST(Stm32g4Clock, BringsUp170MHzInTheManualsOrder) {
       kRccPllcfgr,
       Equals(0x3u | (5u << 4) | (85u << 8) | (1u << 24) | (1u << 21) | (1u << 20)));
   const long pll_on = s.FirstWrite(kRccCr, HasBits(kPllon));
-  // HPRE = 1000 (/2) while SW still selects HSI16, then SW = 11 (PLL).
+  // HPRE = 1000 (/2) first, while SW still selects HSI16 (RM0440 §6.1.5 step 1); later
+  // SW = 11 (PLL) with HPRE still /2.
   const long ahb_div2 =
       s.FirstWrite(kRccCfgr, [](std::uint32_t v) { return ((v >> 4) & 0xF) == 0b1000; });
   const long switch_pll = s.FirstWrite(kRccCfgr, [](std::uint32_t v) {
@@ -70,12 +71,13 @@ TEST(Stm32g4Clock, BringsUp170MHzInTheManualsOrder) {
     ASSERT_GE(i, 0);
   }
   EXPECT_LT(pwren, boost);
+  EXPECT_LT(ahb_div2, boost);
+  EXPECT_EQ(s.log[static_cast<std::size_t>(ahb_div2)].value & 3u, 0b01u);  // on HSI16
   EXPECT_LT(boost, latency);
   EXPECT_LT(latency, hse);
   EXPECT_LT(hse, pllcfg);
   EXPECT_LT(pllcfg, pll_on);
-  EXPECT_LT(pll_on, ahb_div2);
-  EXPECT_LT(ahb_div2, switch_pll);
+  EXPECT_LT(pll_on, switch_pll);
   EXPECT_LT(switch_pll, ahb_div1);
   // The PLL was off (PLLON cleared) when PLLCFGR was written.
   EXPECT_GE(s.FirstWrite(kRccCr, LacksBits(kPllon)), 0);
@@ -111,7 +113,8 @@ TEST(Stm32g4Clock, NoCrystalStopsBeforeTheSwitch) {
   ModelRcc(s, /*hse_starts=*/false);
   EXPECT_EQ(ConfigureClocks(), ClockResult::kHseTimeout);
   EXPECT_LT(s.FirstWrite(kRccPllcfgr, testing::Any()), 0);
-  EXPECT_EQ(s.Peek(kRccCfgr) & 3u, 0b01u);  // still HSI16
+  EXPECT_EQ(s.Peek(kRccCfgr) & 3u, 0b01u);        // still HSI16
+  EXPECT_EQ((s.Peek(kRccCfgr) >> 4) & 0xFu, 0u);  // at AHB /1
 }
 
 TEST(Stm32g4Clock, PeripheralClocksAndFdcanKernelClock) {
