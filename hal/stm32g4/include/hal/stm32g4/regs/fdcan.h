@@ -1,5 +1,5 @@
 // FDCAN1 (RM0440 §44.4, "FDCAN registers"), the clock divider shared by the three
-// FDCANs (FDCAN_CONFIG, §44.4.x CKDIV) and the message RAM (§44.3.3, fixed layout on
+// FDCANs (FDCAN_CONFIG, §44.4: CKDIV) and the message RAM (§44.3.3, fixed layout on
 // this chip).
 //
 // SVD quirk: ST's SVD describes the register block once, as peripheral "FDCAN" at
@@ -60,7 +60,7 @@ inline constexpr FieldDef kIeFields[] = {
     {"BOE", 19, 1},
 };
 inline constexpr FieldDef kIlsFields[] = {
-    // Interrupt groups to line 1 (1) or line 0 (0), RM0440 §44.4.x FDCAN_ILS.
+    // Interrupt groups to line 1 (1) or line 0 (0), RM0440 §44.4, FDCAN_ILS.
     {"RXFIFO0", 0, 1},  // RF0N, RF0F, RF0L
     {"PERR", 6, 1},     // protocol errors: ARA, PED, PEA, WDI, BO, EW, EP
 };

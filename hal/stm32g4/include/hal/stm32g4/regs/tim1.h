@@ -42,7 +42,7 @@ inline constexpr FieldDef kCcerFields[] = {
 inline constexpr FieldDef kCntFields[] = {{"CNT", 0, 16}};
 inline constexpr FieldDef kPscFields[] = {{"PSC", 0, 16}};
 // ARR and CCRx are 20 bits: with CR1.DITHEN = 1 the low 4 bits are the dithering
-// fraction (RM0440 §28.3.x "Dithering"). Dithering stays off here, so values are the
+// fraction (RM0440 §28.3, "Dithering"). Dithering stays off here, so values are the
 // plain 16-bit counts.
 inline constexpr FieldDef kArrFields[] = {{"ARR", 0, 20}};
 inline constexpr FieldDef kRcrFields[] = {{"REP", 0, 16}};
