@@ -71,3 +71,51 @@ function(mjc_add_cm4_image name)
             -P ${PROJECT_SOURCE_DIR}/cmake/check_image.cmake
     VERBATIM)
 endfunction()
+
+# mjc_add_g474_image(<name> SOURCES <src>... [LIBS <lib>...]
+#                    [FLASH_BUDGET <bytes>] [RAM_BUDGET <bytes>])
+#
+# An STM32G474 firmware image linked with linker/stm32g474.ld (the board's start-up code
+# is one of the SOURCES): <name>.elf, <name>.bin and <name>.hex (objcopy), <name>.map,
+# the size report (printed, and <name>.elf.size.txt), the no-heap and no-double checks of
+# firmware images (as mjc_add_cm4_image's NO_HEAP NO_DOUBLE), and the budgets: the link
+# fails when the image's flash (code, constants, initial data) exceeds FLASH_BUDGET or
+# its RAM (SRAM and CCM, both stacks included) exceeds RAM_BUDGET (defaults 64 KB and
+# 32 KB; the linker script's ASSERTs).
+function(mjc_add_g474_image name)
+  cmake_parse_arguments(ARG "" "FLASH_BUDGET;RAM_BUDGET" "SOURCES;LIBS" ${ARGN})
+  if(NOT ARG_FLASH_BUDGET)
+    set(ARG_FLASH_BUDGET 65536)
+  endif()
+  if(NOT ARG_RAM_BUDGET)
+    set(ARG_RAM_BUDGET 32768)
+  endif()
+  set(script ${PROJECT_SOURCE_DIR}/linker/stm32g474.ld)
+  add_executable(${name} ${ARG_SOURCES})
+  set_target_properties(${name} PROPERTIES SUFFIX ".elf")
+  target_link_libraries(${name} PRIVATE mjc_defaults ${ARG_LIBS})
+  target_link_options(${name} PRIVATE
+    -T${script} --specs=nano.specs
+    -Wl,--defsym=__flash_budget=${ARG_FLASH_BUDGET}
+    -Wl,--defsym=__ram_budget=${ARG_RAM_BUDGET}
+    -Wl,-Map=$<TARGET_FILE_DIR:${name}>/${name}.map -Wl,--print-memory-usage)
+  set_property(TARGET ${name} APPEND PROPERTY LINK_DEPENDS ${script})
+  foreach(sym IN LISTS MJC_HEAP_SYMBOLS)
+    target_link_options(${name} PRIVATE -Wl,--wrap=${sym})
+  endforeach()
+  set(forbidden ${MJC_HEAP_SYMBOLS} __aeabi_dadd __aeabi_dsub __aeabi_dmul __aeabi_ddiv
+      __aeabi_f2d __aeabi_i2d __aeabi_d2iz __aeabi_l2d __aeabi_d2lz)
+  # The linker script's figures, printed after every link.
+  set(report __flash_used __flash_budget __ram_used __ram_budget __main_stack_size
+      __interrupt_stack_size)
+  add_custom_command(TARGET ${name} POST_BUILD
+    COMMAND ${CMAKE_OBJCOPY} -O binary $<TARGET_FILE:${name}>
+            $<TARGET_FILE_DIR:${name}>/${name}.bin
+    COMMAND ${CMAKE_OBJCOPY} -O ihex $<TARGET_FILE:${name}>
+            $<TARGET_FILE_DIR:${name}>/${name}.hex
+    COMMAND ${CMAKE_COMMAND} -DELF=$<TARGET_FILE:${name}> -DNM=${CMAKE_NM}
+            -DSIZE=${CMAKE_SIZE} "-DFORBIDDEN=${forbidden}"
+            "-DREPORT=${report}"
+            -P ${PROJECT_SOURCE_DIR}/cmake/check_image.cmake
+    VERBATIM)
+endfunction()

@@ -18,6 +18,14 @@ struct CanPortCounters {
   std::uint32_t bus_off = 0;      // bus-off events, each already being recovered from
   std::uint8_t tx_errors = 0;     // the controller's transmit error counter now
   std::uint8_t rx_errors = 0;     // its receive error counter now
+  // The controller's protocol status now (CAN error states, ISO 11898-1).
+  bool error_warning = false;  // a counter has reached 96
+  bool error_passive = false;  // a counter has reached 128
+  bool bus_off_now = false;    // the controller is off the bus (recovering)
+  // The last error seen on the bus since the previous counters() call: 0 none, 1 stuff,
+  // 2 form, 3 acknowledge, 4 bit 1, 5 bit 0, 6 CRC, 7 no change (ISO 11898-1 / M_CAN
+  // LEC coding); a port without this knowledge reports 7.
+  std::uint8_t last_error = 7;
 };
 
 class CanPort {

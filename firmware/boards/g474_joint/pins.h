@@ -1,0 +1,102 @@
+// The joint board's pin-out: every signal, its pin, mode and alternate function, as data
+// (ConfigurePin takes each entry). STM32G474 in LQFP64 (RET6).
+//
+// Alternate-function numbers checked against ST's STM32G474 alternate-function table
+// (DS12288, "Alternate function" tables) as carried by modm-io/modm-devices
+// `devices/stm32/stm32g4-74_84.xml` @ cd25d12 (generated from ST's CubeMX pin database):
+//   PA4  —                 (AF5 would be SPI1_NSS; here a plain output: the AS5047P's CS)
+//   PA5  AF5 SPI1_SCK      PA6  AF5 SPI1_MISO      PA7  AF5 SPI1_MOSI
+//   PA8  AF6 TIM1_CH1      PA9  AF6 TIM1_CH2
+//   PB13 AF6 TIM1_CH1N     PB14 AF6 TIM1_CH2N
+//   PC6  AF2 TIM3_CH1      PC7  AF2 TIM3_CH2
+//   PA11 AF9 FDCAN1_RX     PA12 AF9 FDCAN1_TX
+// Pins kept free on purpose: PA13/PA14 (SWD), PB3 (SWO), PB8 (BOOT0: a pulled signal
+// there would select the ROM bootloader at reset with the factory option bytes, see the
+// chip notes), PB4/PB6 (UCPD1's dead-battery pull-downs after reset), PF0/PF1 (the 24 MHz
+// crystal, taken by the HSE when HSEON is set), PB12 (TIM1_BKIN, AF6: reserved for the
+// gate driver's fault output as a hardware break input).
+#pragma once
+
+#include "hal/stm32g4/gpio.h"
+
+namespace mjc::board {
+
+using stm32g4::OutputType;
+using stm32g4::Pin;
+using stm32g4::PinConfig;
+using stm32g4::PinMode;
+using stm32g4::Port;
+using stm32g4::Pull;
+using stm32g4::Speed;
+
+inline constexpr Pin kJointCs{Port::kA, 4};
+inline constexpr Pin kBridgeEnable{Port::kB, 10};
+inline constexpr Pin kStatusLed{Port::kB, 11};
+
+inline constexpr PinConfig kPins[] = {
+    // H-bridge: gate driver inputs, push-pull, fast edges (the dead time is 250 ns).
+    {.pin = {Port::kA, 8},
+     .mode = PinMode::kAlternate,
+     .alternate = 6,
+     .speed = Speed::kHigh,
+     .pull = Pull::kDown},  // TIM1_CH1  leg A high side
+    {.pin = {Port::kB, 13},
+     .mode = PinMode::kAlternate,
+     .alternate = 6,
+     .speed = Speed::kHigh,
+     .pull = Pull::kDown},  // TIM1_CH1N leg A low side
+    {.pin = {Port::kA, 9},
+     .mode = PinMode::kAlternate,
+     .alternate = 6,
+     .speed = Speed::kHigh,
+     .pull = Pull::kDown},  // TIM1_CH2  leg B high side
+    {.pin = {Port::kB, 14},
+     .mode = PinMode::kAlternate,
+     .alternate = 6,
+     .speed = Speed::kHigh,
+     .pull = Pull::kDown},  // TIM1_CH2N leg B low side
+    // The bridge's enable line: low (disabled) from the moment it becomes an output;
+    // the board's pull-down holds it low before and after (reset, watchdog).
+    {.pin = kBridgeEnable,
+     .mode = PinMode::kOutput,
+     .pull = Pull::kDown,
+     .initial_high = false},
+    // Motor encoder A/B (open-collector outputs on the encoder: pulled up).
+    {.pin = {Port::kC, 6},
+     .mode = PinMode::kAlternate,
+     .alternate = 2,
+     .pull = Pull::kUp},  // TIM3_CH1
+    {.pin = {Port::kC, 7},
+     .mode = PinMode::kAlternate,
+     .alternate = 2,
+     .pull = Pull::kUp},  // TIM3_CH2
+    // Joint encoder on SPI1; CS idle high.
+    {.pin = {Port::kA, 5},
+     .mode = PinMode::kAlternate,
+     .alternate = 5,
+     .speed = Speed::kMedium},  // SPI1_SCK
+    {.pin = {Port::kA, 6},
+     .mode = PinMode::kAlternate,
+     .alternate = 5,
+     .pull = Pull::kUp},  // SPI1_MISO (the sensor tri-states it while CS is high)
+    {.pin = {Port::kA, 7},
+     .mode = PinMode::kAlternate,
+     .alternate = 5,
+     .speed = Speed::kMedium},  // SPI1_MOSI
+    {.pin = kJointCs,
+     .mode = PinMode::kOutput,
+     .speed = Speed::kMedium,
+     .initial_high = true},
+    // CAN FD transceiver.
+    {.pin = {Port::kA, 11},
+     .mode = PinMode::kAlternate,
+     .alternate = 9,
+     .pull = Pull::kUp},  // FDCAN1_RX
+    {.pin = {Port::kA, 12},
+     .mode = PinMode::kAlternate,
+     .alternate = 9,
+     .speed = Speed::kHigh},  // FDCAN1_TX
+    {.pin = kStatusLed, .mode = PinMode::kOutput},
+};
+
+}  // namespace mjc::board

@@ -1,0 +1,194 @@
+// Reset and exception entry of the joint board (STM32G474).
+//
+// Reset_Handler: thread mode moves to the process stack (the main stack in SRAM) while
+// exceptions keep the main stack pointer (the interrupt stack in CCM SRAM, loaded from
+// vector 0), then StartUp(): the FPU first (CPACR, ARMv7-M B3.2.20: before any
+// floating-point instruction, and nothing before it uses one), .data and .ccm_data
+// copied, .bss and .ccm_bss zeroed, VTOR at this image's vector table (a bootloader
+// below it may have left its own), static constructors, the clock tree (170 MHz), then
+// main().
+//
+// Every exception and interrupt without a driver goes to DefaultHandler: the bridge's
+// enable line low and TIM1's main output off (its idle state: both low sides on, so the
+// motor is braked, not left to run on its last duty), the exception number kept in a
+// RAM word that survives the reset, and a system reset (AIRCR.SYSRESETREQ). The reset
+// puts every pin back to input, where the board's pull-downs hold the bridge off; the
+// next boot reports the crash (Startup().crashed). If even that fails (a fault while
+// stacking onto an overflowed interrupt stack locks the core up), the watchdog resets
+// the chip within 100 ms.
+#include <cstdint>
+#include <cstring>
+
+#include "board.h"
+#include "hal/stm32g4/mmio.h"
+#include "hal/stm32g4/nvic.h"
+#include "hal/stm32g4/regs/cortex_m4.h"
+#include "hal/stm32g4/regs/irq.h"
+#include "hal/stm32g4/vector_table.h"
+
+extern "C" {
+// Linker script symbols (linker/stm32g474.ld).
+extern std::uint32_t __data_start[], __data_end[], __data_load[];
+extern std::uint32_t __bss_start[], __bss_end[];
+extern std::uint32_t __ccm_data_start[], __ccm_data_end[], __ccm_data_load[];
+extern std::uint32_t __ccm_bss_start[], __ccm_bss_end[];
+extern std::uint32_t __interrupt_stack_top[];
+extern std::uint32_t __main_stack_top[];
+extern const std::uint32_t __vector_table[];
+
+void __libc_init_array();
+void _init() {}
+void _fini() {}
+void* __dso_handle = &__dso_handle;
+
+// Firmware objects live for the whole run (main never returns): their destructors are
+// never registered. Without this, each global with a destructor would pull in newlib's
+// __cxa_atexit, which allocates.
+int __aeabi_atexit(void* /*object*/, void (* /*destructor*/)(void*), void* /*dso*/) {
+  return 0;
+}
+
+int main();
+[[noreturn]] void Reset_Handler();
+[[noreturn]] void StartUp();
+[[noreturn]] void DefaultHandler();
+// The drivers' interrupt entries (main.cc).
+void TickInterrupt();
+void CanLine0Interrupt();
+void CanLine1Interrupt();
+}
+
+namespace mjc::board {
+namespace {
+
+// Survives a reset (.noinit: neither copied nor zeroed); valid when `magic` matches.
+struct CrashRecord {
+  std::uint32_t magic;
+  std::uint32_t exception;
+};
+constexpr std::uint32_t kCrashMagic = 0x43524153u;  // "CRAS"
+__attribute__((section(".noinit.crash"))) CrashRecord g_crash;
+
+StartupReport g_report;
+
+std::size_t Bytes(const std::uint32_t* begin, const std::uint32_t* end) {
+  return static_cast<std::size_t>(reinterpret_cast<std::uintptr_t>(end) -
+                                  reinterpret_cast<std::uintptr_t>(begin));
+}
+
+}  // namespace
+
+const StartupReport& Startup() { return g_report; }
+
+}  // namespace mjc::board
+
+using mjc::stm32g4::Address;
+using mjc::stm32g4::Read32;
+using mjc::stm32g4::Write32;
+
+// No heap, so nothing is ever deleted. The vtables of polymorphic classes (hal::CanPort,
+// hal::Flash) still name their deleting destructors, which call operator delete; these
+// definitions keep libstdc++'s (and with it free() and the allocator) out of the image,
+// and stop the board should one ever be reached.
+void operator delete(void* /*pointer*/) noexcept { DefaultHandler(); }
+void operator delete(void* /*pointer*/, std::size_t /*bytes*/) noexcept {
+  DefaultHandler();
+}
+
+// Naked: no prologue may touch the stack before the stack pointers are set.
+__attribute__((naked)) void Reset_Handler() {
+  asm volatile(
+      "ldr r0, =__main_stack_top\n"
+      "msr psp, r0\n"
+      "movs r0, #2\n"  // CONTROL.SPSEL = 1: thread mode on PSP
+      "msr control, r0\n"
+      "isb\n"
+      "b StartUp\n");
+}
+
+void StartUp() {
+  namespace scb = mjc::stm32g4::scb;
+  const Address cpacr = scb::kBase + scb::kCpacr;
+  Write32(cpacr,
+          Read32(cpacr) | scb::cpacr::kCp10.Value(0b11) | scb::cpacr::kCp11.Value(0b11));
+  mjc::stm32g4::DataSyncBarrier();
+  mjc::stm32g4::InstructionSyncBarrier();
+
+  using mjc::board::Bytes;
+  std::memcpy(__data_start, __data_load, Bytes(__data_start, __data_end));
+  std::memset(__bss_start, 0, Bytes(__bss_start, __bss_end));
+  std::memcpy(__ccm_data_start, __ccm_data_load, Bytes(__ccm_data_start, __ccm_data_end));
+  std::memset(__ccm_bss_start, 0, Bytes(__ccm_bss_start, __ccm_bss_end));
+
+  Write32(scb::kBase + scb::kVtor,
+          static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(__vector_table)));
+  // Usage, bus and memory-management faults get their own vectors (here all the
+  // default handler) instead of escalating; divisions by zero trap.
+  const Address shcsr = scb::kBase + scb::kShcsr;
+  Write32(shcsr, Read32(shcsr) | scb::shcsr::kMemfaultena.Bit() |
+                     scb::shcsr::kBusfaultena.Bit() | scb::shcsr::kUsgfaultena.Bit());
+  const Address ccr = scb::kBase + scb::kCcr;
+  Write32(ccr, Read32(ccr) | scb::ccr::kDiv0Trp.Bit());
+  mjc::stm32g4::DataSyncBarrier();
+  mjc::stm32g4::InstructionSyncBarrier();
+
+  using mjc::board::g_crash;
+  using mjc::board::g_report;
+  g_report.crashed = g_crash.magic == mjc::board::kCrashMagic;
+  g_report.crash_exception = g_report.crashed ? g_crash.exception : 0;
+  g_crash.magic = 0;
+
+  __libc_init_array();
+  g_report.clock = mjc::stm32g4::ConfigureClocks();
+  (void)main();
+  DefaultHandler();  // main never returns; if it did, stop as for a fault
+}
+
+void DefaultHandler() {
+  mjc::stm32g4::DisableInterrupts();
+  mjc::board::StopBridge();
+  std::uint32_t ipsr = 0;
+  asm volatile("mrs %0, ipsr" : "=r"(ipsr));
+  mjc::board::g_crash.exception = ipsr & 0x1FFu;
+  mjc::board::g_crash.magic = mjc::board::kCrashMagic;
+  mjc::stm32g4::RequestSystemReset();
+  for (;;) {
+  }
+}
+
+using Handler = void (*)();
+
+struct VectorTable {
+  const void* initial_stack_pointer;
+  std::array<Handler, mjc::stm32g4::kVectorCount - 1> handlers;
+};
+
+namespace {
+
+constexpr std::array<mjc::stm32g4::IrqHandler<Handler>, 3> kDriverIrqs{{
+    {mjc::stm32g4::irq::kTim1Update, TickInterrupt},
+    {mjc::stm32g4::irq::kFdcan1Line0, CanLine0Interrupt},
+    {mjc::stm32g4::irq::kFdcan1Line1, CanLine1Interrupt},
+}};
+
+constexpr mjc::stm32g4::SystemHandlers<Handler> kSystem{
+    .reset = Reset_Handler,
+    .nmi = DefaultHandler,
+    .hard_fault = DefaultHandler,
+    .mem_manage = DefaultHandler,
+    .bus_fault = DefaultHandler,
+    .usage_fault = DefaultHandler,
+    .svcall = DefaultHandler,
+    .debug_monitor = DefaultHandler,
+    .pendsv = DefaultHandler,
+    .systick = DefaultHandler,
+};
+
+}  // namespace
+
+// Position 0 the interrupt stack's top; every other position from the IRQ table.
+extern "C" __attribute__((section(".isr_vector"),
+                          used)) constinit const VectorTable kVectorTable = {
+    __interrupt_stack_top,
+    mjc::stm32g4::BuildVectorTable(kSystem, Handler{&DefaultHandler}, Handler{nullptr},
+                                   kDriverIrqs)};

@@ -1,0 +1,138 @@
+#include "hal/stm32g4/flash.h"
+
+#include "hal/stm32g4/poll.h"
+#include "hal/stm32g4/regs/flash.h"
+
+namespace mjc::stm32g4 {
+namespace {
+
+using hal::FlashResult;
+
+constexpr Address kSr = flash::kBase + flash::kSr;
+constexpr Address kCr = flash::kBase + flash::kCr;
+constexpr Address kAcr = flash::kBase + flash::kAcr;
+// A page erase takes up to ~40 ms (datasheet t_ERASE); a register read at 170 MHz takes
+// a few cycles, so 2^24 reads (≥ 100 ms) bound every wait.
+constexpr std::uint32_t kMaxPolls = 1u << 24;
+
+bool WaitNotBusy() { return WaitFor(kSr, flash::sr::kBsy.Bit(), 0, kMaxPolls); }
+
+// RM0440 §5.3.5 "Flash program and erase operations", unlocking: KEY1 then KEY2 into
+// FLASH_KEYR; LOCK then reads 0. (A wrong key locks FLASH_CR until the next reset.)
+bool Unlock() {
+  if (!flash::cr::kLock.IsSet(Read32(kCr))) return true;
+  Write32(flash::kBase + flash::kKeyr, flash::keyr::kKey1);
+  Write32(flash::kBase + flash::kKeyr, flash::keyr::kKey2);
+  return !flash::cr::kLock.IsSet(Read32(kCr));
+}
+void Lock() { Write32(kCr, flash::cr::kLock.Bit()); }
+
+// Error flags of the last operation, then cleared (write 1), EOP too.
+std::uint32_t TakeErrors() {
+  const std::uint32_t errors = Read32(kSr) & flash::sr::kProgramErrors;
+  Write32(kSr, errors | flash::sr::kEop.Bit());
+  return errors;
+}
+
+// The data and instruction caches may hold the old content of a page that is erased or
+// programmed: RM0440 §5.3 (ART accelerator, "instruction/data cache"): a cache is reset
+// (ICRST/ DCRST) only while it is disabled. Both are disabled for the operation, reset
+// after it and re-enabled, as ST's HAL does for erases (FLASH_FlushCaches).
+std::uint32_t DisableCaches() {
+  const std::uint32_t acr = Read32(kAcr);
+  Write32(kAcr, acr & ~(flash::acr::kIcen.Bit() | flash::acr::kDcen.Bit()));
+  return acr;
+}
+void ResetAndRestoreCaches(std::uint32_t acr) {
+  const std::uint32_t off =
+      Read32(kAcr) & ~(flash::acr::kIcen.Bit() | flash::acr::kDcen.Bit());
+  Write32(kAcr, off | flash::acr::kIcrst.Bit() | flash::acr::kDcrst.Bit());
+  Write32(kAcr, off);
+  Write32(kAcr, off | (acr & (flash::acr::kIcen.Bit() | flash::acr::kDcen.Bit())));
+}
+
+FlashResult Finish(std::uint32_t clear_bits, std::uint32_t acr, bool done) {
+  const std::uint32_t errors = TakeErrors();
+  Write32(kCr, Read32(kCr) & ~clear_bits);
+  ResetAndRestoreCaches(acr);
+  Lock();
+  if (!done) return FlashResult::kHardwareError;
+  // PROGERR: the double-word was not erased (RM0440 FLASH_SR.PROGERR).
+  if (errors == flash::sr::kProgerr.Bit()) return FlashResult::kNotErased;
+  return errors == 0 ? FlashResult::kOk : FlashResult::kHardwareError;
+}
+
+}  // namespace
+
+bool Stm32g4Flash::Init() {
+  const bool dual_bank = flash::optr::kDbank.IsSet(Read32(flash::kBase + flash::kOptr));
+  const std::uint32_t size_kb = Read16(flash::kFlashSizeRegister);
+  geometry_ok_ = dual_bank && size_kb == kPages * kPageSize / 1024;
+  return geometry_ok_;
+}
+
+FlashResult Stm32g4Flash::DoErasePage(std::uint32_t page) {
+  if (page >= kPages) return FlashResult::kBadAddress;
+  if (!Writable(page))
+    return geometry_ok_ ? FlashResult::kBadAddress : FlashResult::kHardwareError;
+  // RM0440 §5.3.7 "Flash main memory erase sequences", page erase: no operation
+  // ongoing (BSY = 0), error flags of earlier operations cleared, PER with the page and
+  // its bank (BKER: bank 2 in dual-bank mode), then STRT, wait BSY = 0, clear PER.
+  if (!WaitNotBusy() || !Unlock()) return FlashResult::kHardwareError;
+  (void)TakeErrors();
+  const std::uint32_t acr = DisableCaches();
+  const std::uint32_t bank = page / kPagesPerBank;
+  const std::uint32_t cr = flash::cr::kPer.Bit() |
+                           flash::cr::kPnb.Value(page % kPagesPerBank) |
+                           (bank == 1 ? flash::cr::kBker.Bit() : 0u);
+  Write32(kCr, cr);
+  Write32(kCr, cr | flash::cr::kStrt.Bit());
+  const bool done = WaitNotBusy();
+  return Finish(flash::cr::kPer.Bit() | flash::cr::kPnb.Mask() | flash::cr::kBker.Bit(),
+                acr, done);
+}
+
+FlashResult Stm32g4Flash::DoProgram(std::uint32_t page, std::uint32_t offset,
+                                    std::uint64_t value) {
+  if (page >= kPages || offset % kDoubleWord != 0 || offset > kPageSize - kDoubleWord) {
+    return FlashResult::kBadAddress;
+  }
+  if (!Writable(page))
+    return geometry_ok_ ? FlashResult::kBadAddress : FlashResult::kHardwareError;
+  const Address address = PageAddress(page) + offset;
+  // Only an erased double-word may be programmed (its ECC is written once).
+  if (Read32(address) != 0xFFFFFFFFu || Read32(address + 4) != 0xFFFFFFFFu) {
+    return FlashResult::kNotErased;
+  }
+  // RM0440 §5.3.8 "Flash main memory programming sequences", standard programming: BSY
+  // = 0, errors cleared, PG = 1, the double-word as two 32-bit writes (low word at the
+  // 8-aligned address first), wait BSY = 0, check the flags, PG = 0.
+  if (!WaitNotBusy() || !Unlock()) return FlashResult::kHardwareError;
+  (void)TakeErrors();
+  const std::uint32_t acr = DisableCaches();
+  Write32(kCr, flash::cr::kPg.Bit());
+  Write32(address, static_cast<std::uint32_t>(value));
+  InstructionSyncBarrier();
+  Write32(address + 4, static_cast<std::uint32_t>(value >> 32));
+  const bool done = WaitNotBusy();
+  return Finish(flash::cr::kPg.Bit(), acr, done);
+}
+
+FlashResult Stm32g4Flash::DoRead(std::uint32_t page, std::uint32_t offset,
+                                 std::span<std::uint8_t> out) const {
+  if (page >= kPages || offset > kPageSize || out.size() > kPageSize - offset) {
+    return FlashResult::kBadAddress;
+  }
+  // Aligned 32-bit reads, bytes taken little-endian.
+  const Address start = PageAddress(page) + offset;
+  for (std::size_t i = 0; i < out.size();) {
+    const Address a = static_cast<Address>(start + i);
+    const std::uint32_t word = Read32(a & ~3u);
+    for (std::uint32_t b = a & 3u; b < 4 && i < out.size(); ++b, ++i) {
+      out[i] = static_cast<std::uint8_t>(word >> (8 * b));
+    }
+  }
+  return FlashResult::kOk;
+}
+
+}  // namespace mjc::stm32g4
