@@ -117,9 +117,18 @@ void VirtualChip::SpendCycles(std::uint64_t n) {
 }
 
 void VirtualChip::AdvanceTo(Picoseconds t) {
-  if (t <= now_) return;
-  Sync(t);
-  ServiceInterrupts();
+  // Step through every model event on the way, so that interrupts and resets happen
+  // at their own time rather than at `t`.
+  while (now_ < t) {
+    Picoseconds next = t;
+    for (Peripheral* p : std::initializer_list<Peripheral*>{
+             &rcc_, &pwr_, &flash_, &tim1_, &tim3_, &spi1_, &fdcan1_, &iwdg_}) {
+      const Picoseconds e = p->NextEvent();
+      if (e > now_ && e < next) next = e;
+    }
+    Sync(next);
+    ServiceInterrupts();
+  }
 }
 
 void VirtualChip::Schedule(Picoseconds at, std::function<void()> fn) {
