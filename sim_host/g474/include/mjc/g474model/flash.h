@@ -1,0 +1,162 @@
+// The STM32G474's embedded flash: the FLASH register block (0x40022000) and the
+// memory-mapped array (512 KB at 0x08000000), from RM0440 §5 "Embedded Flash memory
+// (FLASH)"; offsets, fields and reset values from ST's SVD v2.9.
+//
+// Covered:
+//  - ACR: LATENCY (the chip checks it against HCLK, see ClockRules), PRFTEN, ICEN,
+//    DCEN, ICRST/DCRST (only while the cache is off).
+//  - KEYR: KEY1 = 0x45670123 then KEY2 = 0xCDEF89AB clear CR.LOCK; any other value or
+//    order is a bus error and locks CR until the next reset (§5.3.5 "Flash memory
+//    unlock"). OPTKEYR likewise for OPTLOCK (option programming itself is not modelled).
+//  - SR: EOP (set at the end of an operation only when CR.EOPIE = 1), OPERR (with
+//    ERRIE), PROGERR, WRPERR, PGAERR, SIZERR, PGSERR, MISSERR, FASTERR, RDERR, OPTVERR,
+//    all write-1-to-clear; BSY.
+//  - CR: page erase (PER, PNB, BKER, STRT), bank mass erase (MER1/MER2), double-word
+//    programming (PG: two 32-bit writes, the first 8-byte aligned, the second at +4
+//    starts the operation) with the §5.3.8 error rules: a half-word write is SIZERR; a
+//    first word not 8-aligned or a second word elsewhere is PGAERR; a double word that is
+//    not erased is PROGERR unless the new value is all zeros; a write to the array
+//    without PG, or starting while an earlier error flag is still set, is PGSERR; a write
+//    or erase inside an active WRP area is WRPERR. An operation never starts with an
+//    error. CR is ignored while locked; a write while BSY stalls the bus until BSY
+//    clears, and so does a read of the bank being programmed (dual-bank read-while-
+//    write only across banks).
+//  - Busy times from DS12288 "Flash memory characteristics" (typical, from memory):
+//    64-bit program 81.7 µs, page erase 22.02 ms, bank mass erase 22.13 ms.
+//  - The array: dual bank (OPTR.DBANK = 1, the factory value 0xFFEFF8AA), 2 × 128 pages
+//    of 2 KB; bank 2 at 0x08040000. Reads of 2 or 4 bytes. Flash size (0x1FFF75E0) and
+//    the unique ID (0x1FFF7590) read as the chip's.
+//  - Power cuts like hal::SimFlash: the (n+1)-th operation from now is interrupted at a
+//    random point of its busy time (seeded); an interrupted erase leaves the page
+//    random bytes, an interrupted program a random mix of old and new bits, and the
+//    whole chip loses power (the owner restarts it). Optional persistence to a file.
+//
+// Not covered: option-byte programming and loading (OPTSTRT, OBL_LAUNCH), fast
+// programming (FSTPG), PCROP and the securable area, ECC errors, single-bank mode
+// (DBANK = 0), power-down modes, the OTP area.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "mjc/g474model/common.h"
+
+namespace mjc::g474model {
+
+struct FlashConfig {
+  std::string path;  // persistence file ("" = none); loaded if its size matches
+  Picoseconds program_time = Microseconds(81.7);
+  Picoseconds page_erase_time = Microseconds(22020);
+  Picoseconds mass_erase_time = Microseconds(22130);
+  std::uint32_t uid[3] = {0x00400031u, 0x4E4B5003u, 0x20343736u};
+};
+
+class Flash final : public Peripheral {
+ public:
+  static constexpr std::uint32_t kBase = 0x40022000;       // registers
+  static constexpr std::uint32_t kArrayBase = 0x08000000;  // memory
+  static constexpr std::uint32_t kPageSize = 2048;
+  static constexpr std::uint32_t kPagesPerBank = 128;
+  static constexpr std::uint32_t kSize = 2 * kPagesPerBank * kPageSize;  // 512 KB
+  static constexpr std::uint32_t kKey1 = 0x45670123u, kKey2 = 0xCDEF89ABu;
+  static constexpr std::uint32_t kOptKey1 = 0x08192A3Bu, kOptKey2 = 0x4C5D6E7Fu;
+
+  // SR bits.
+  static constexpr std::uint32_t kEop = 1u << 0, kOperr = 1u << 1, kProgerr = 1u << 3,
+                                 kWrperr = 1u << 4, kPgaerr = 1u << 5, kSizerr = 1u << 6,
+                                 kPgserr = 1u << 7, kMisserr = 1u << 8,
+                                 kFasterr = 1u << 9, kRderr = 1u << 14,
+                                 kOptverr = 1u << 15, kBsy = 1u << 16;
+
+  Flash(ViolationLog* log, FlashConfig config);
+
+  // The register block.
+  bool Read(const Access& a, std::uint32_t* value) override;
+  bool Write(const Access& a) override;
+  // A system reset: registers to reset values (locked); an operation in progress
+  // completes first (the reset waits for it, as the chip's flash interface does).
+  void Reset() override;
+  void Advance(Picoseconds now) override;
+  Picoseconds NextEvent() const override;
+
+  // The array and the information block, addressed by bus address.
+  bool ReadMemory(std::uint32_t address, unsigned bytes, std::uint32_t* value);
+  bool WriteMemory(std::uint32_t address, std::uint32_t value, unsigned bytes);
+  static bool InArray(std::uint32_t a) {
+    return a >= kArrayBase && a < kArrayBase + kSize;
+  }
+  static bool InInfo(std::uint32_t a) {
+    return (a >= 0x1FFF7590u && a < 0x1FFF759Cu) || (a >= 0x1FFF75E0u && a < 0x1FFF75E4u);
+  }
+  // Set by an array access that had to wait for the busy bank: the time the access
+  // completes. The chip moves its clock there. 0 when no stall.
+  Picoseconds TakeStall() {
+    const Picoseconds s = stall_until_;
+    stall_until_ = 0;
+    return s;
+  }
+
+  std::uint32_t latency() const { return acr_ & 0xFu; }
+  bool busy() const { return op_.kind != OpKind::kNone; }
+  bool locked() const { return (cr_ & (1u << 31)) != 0; }
+  std::uint32_t sr() const { return sr_; }
+  // FLASH interrupt line (IRQ 4): EOP with EOPIE or OPERR with ERRIE.
+  bool irq() const {
+    return ((sr_ & kEop) && (cr_ & (1u << 24))) || ((sr_ & kOperr) && (cr_ & (1u << 25)));
+  }
+
+  // Power cuts: the (count+1)-th erase or program from now is interrupted; -1 disables.
+  void CutPowerAfter(long count, std::uint64_t seed);
+  long operations() const { return operations_; }
+  // Called when an interrupted operation takes the power away (the chip power-cycles).
+  void SetPowerCutHook(std::function<void()> hook) { power_cut_hook_ = std::move(hook); }
+  // The supply fails now (from the world): an operation in progress is left as a cut
+  // leaves it. Returns true when one was.
+  bool PowerLost();
+  // Direct view of the array for tests and the world (offset from 0x08000000).
+  const std::vector<std::uint8_t>& contents() const { return memory_; }
+  std::vector<std::uint8_t>& mutable_contents() { return memory_; }
+
+ private:
+  enum class OpKind { kNone, kErase, kProgram };
+  struct Operation {
+    OpKind kind = OpKind::kNone;
+    std::uint32_t offset = 0;  // into the array
+    std::uint32_t length = 0;
+    std::uint64_t value = 0;  // program
+    Picoseconds end = 0;
+    Picoseconds cut_at = kNever;  // when a scheduled power cut interrupts it
+  };
+  void Error(std::uint32_t flags, const std::string& why);
+  bool ErrorsPending() const;
+  bool WriteProtected(std::uint32_t offset) const;
+  void StartOperation(Operation op, Picoseconds duration);
+  void Complete();
+  void Interrupt();
+  int BankOf(std::uint32_t offset) const { return offset < kSize / 2 ? 0 : 1; }
+  void Save() const;
+
+  ViolationLog* log_;
+  FlashConfig config_;
+  Picoseconds now_ = 0;
+  std::vector<std::uint8_t> memory_;
+  std::uint32_t acr_ = 0, sr_ = 0, cr_ = 0, optr_ = 0;
+  std::uint32_t wrp_[4] = {};  // WRP1AR, WRP1BR, WRP2AR, WRP2BR
+  int key_stage_ = 0;          // 1 after KEY1
+  bool keys_dead_ = false;     // a wrong key: locked until reset
+  int optkey_stage_ = 0;
+  // PG: the first word of a double word waiting for its second.
+  bool have_first_ = false;
+  std::uint32_t first_offset_ = 0, first_word_ = 0;
+  Operation op_;
+  Picoseconds stall_until_ = 0;
+  long cut_after_ = -1;
+  long operations_ = 0;
+  std::mt19937_64 rng_;
+  std::function<void()> power_cut_hook_;
+};
+
+}  // namespace mjc::g474model

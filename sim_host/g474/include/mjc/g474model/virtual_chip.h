@@ -1,0 +1,206 @@
+// The virtual STM32G474: the register models composed behind the address decoder the
+// drivers' Read16/Read32/Write16/Write32 reach on the host (mjc::stm32g4::RegisterSpace),
+// with virtual time, the Cortex-M4's interrupt entry, and the world's side of the
+// board's wiring.
+//
+// Time: the chip counts CPU cycles at the SYSCLK the RCC model gives (16 MHz HSI16 after
+// reset); every register access costs `access_cycles`, interrupt entry and exit 12 each
+// (Cortex-M4 TRM, "exception entry latency"), so busy-wait loops on a ready flag end
+// as on the chip. WaitForInterrupt() jumps to the next event of any model or of the
+// world's schedule. Each access first brings every model to the present time; world
+// events (Schedule) run at their time, between accesses.
+//
+// Interrupts: a model's interrupt line high makes its IRQ pending in the NVIC; a
+// pending, enabled IRQ is taken after the access in progress (or in WFI) when PRIMASK
+// is clear and its group priority (NVIC_IPR, lower wins, AIRCR.PRIGROUP) is strictly
+// higher than the running handler's — preemption, and no re-entry at the same level.
+// The handler is the function registered for that IRQ (the same function the image's
+// vector table holds); lines are level-sensitive, so a handler that does not clear its
+// flag is entered again.
+//
+// Resets: IWDG expiry, AIRCR.SYSRESETREQ and a power cut (the world's PowerCut or a
+// flash power cut scheduled with flash().CutPowerAfter) reset every model — the flash
+// array keeps its contents, RCC_CSR gets the cause's flags — and then call the reset
+// handler, which by default throws ChipReset so that the firmware's stack unwinds back
+// to the owner, who starts the firmware again (its RAM is gone: the owner constructs
+// it anew). Virtual time goes on across resets.
+//
+// Violations of the manual's rules by the code under test land in violations(); any
+// access outside the modelled address map is one too ("bus").
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+
+#include "hal/stm32g4/mmio.h"
+#include "mjc/g474model/as5047p.h"
+#include "mjc/g474model/common.h"
+#include "mjc/g474model/cortex.h"
+#include "mjc/g474model/fdcan.h"
+#include "mjc/g474model/flash.h"
+#include "mjc/g474model/gpio.h"
+#include "mjc/g474model/iwdg.h"
+#include "mjc/g474model/rcc.h"
+#include "mjc/g474model/spi.h"
+#include "mjc/g474model/timer.h"
+
+namespace mjc::g474model {
+
+// IRQ numbers (RM0440 vector table; ST's SVD v2.9).
+namespace irq {
+inline constexpr int kFlash = 4, kRcc = 5, kFdcan1It0 = 21, kFdcan1It1 = 22, kTim1Up = 25,
+                     kTim3 = 29, kSpi1 = 35;
+}
+
+enum class ResetCause : std::uint8_t { kSoftware, kIwdg, kPowerCut };
+const char* ResetCauseName(ResetCause c);
+
+// Thrown by the default reset handler (and caught by the owner).
+struct ChipReset {
+  ResetCause cause;
+};
+// Thrown when virtual time would pass the owner's limit (SetTimeLimit).
+struct TimeLimitReached {
+  Picoseconds at;
+};
+
+struct ChipConfig {
+  RccConfig rcc;
+  FlashConfig flash;
+  unsigned access_cycles = 4;  // per register access (AHB/APB bridge, a few cycles)
+  unsigned exception_cycles = 12;
+};
+
+// Where the AS5047P hangs on the board.
+struct SpiWiring {
+  PinId sck = Pin('A', 5), miso = Pin('A', 6), mosi = Pin('A', 7), cs = Pin('A', 4);
+};
+
+// What the H-bridge sees: average drive in [-1, 1] (IN1 duty − IN2 duty) and the enable.
+struct BridgeDrive {
+  double duty = 0;
+  bool enabled = false;
+  bool floating = false;  // an input of the bridge is not driven by the chip
+};
+
+class VirtualChip final : public stm32g4::RegisterSpace {
+ public:
+  explicit VirtualChip(ChipConfig config = {});
+  ~VirtualChip() override;
+  VirtualChip(const VirtualChip&) = delete;
+  VirtualChip& operator=(const VirtualChip&) = delete;
+
+  // ── RegisterSpace ───────────────────────────────────────────────────────────────
+  std::uint32_t Read(stm32g4::Address address, unsigned bytes) override;
+  void Write(stm32g4::Address address, std::uint32_t value, unsigned bytes) override;
+  void WaitForInterrupt() override;
+  void MaskInterrupts(bool masked) override;
+
+  // ── Time ────────────────────────────────────────────────────────────────────────
+  Picoseconds now() const { return now_; }
+  std::uint64_t cycles() const { return cycles_; }
+  // CPU work between accesses (the firmware's own instructions), in cycles.
+  void SpendCycles(std::uint64_t n);
+  // Moves virtual time to `t` (≥ now), running due events and interrupts.
+  void AdvanceTo(Picoseconds t);
+  // Runs `fn` at virtual time `at` (between accesses or during WFI).
+  void Schedule(Picoseconds at, std::function<void()> fn);
+  // Throws TimeLimitReached when time would pass `t` (kNever: no limit).
+  void SetTimeLimit(Picoseconds t) { limit_ = t; }
+
+  // ── Interrupts and resets ───────────────────────────────────────────────────────
+  void SetHandler(int irq, std::function<void()> handler);
+  bool primask() const { return primask_; }
+  void SetResetHandler(std::function<void(ResetCause)> handler) {
+    reset_handler_ = std::move(handler);
+  }
+  // The supply fails (a flash operation in progress is left as a cut leaves it) and
+  // comes back: a power-on reset.
+  void PowerCut();
+  int resets() const { return resets_; }
+
+  // ── The world's side ────────────────────────────────────────────────────────────
+  // The motor's quadrature encoder: channels A and B on these pins.
+  void AttachEncoder(PinId a, PinId b);
+  // Moves the encoder to `position` (x4 counts), one quadrature edge at a time.
+  void MoveEncoder(std::int64_t position);
+  std::int64_t encoder_position() const { return encoder_pos_; }
+  // The AS5047P on SPI1 with this wiring (owned by the chip).
+  As5047p& AttachAs5047p(SpiWiring wiring = {});
+  // The CAN transceiver's TXD/RXD pins (FDCAN1_TX/RX must be routed there).
+  void AttachCanTransceiver(PinId tx, PinId rx);
+  // A frame from the bus reaches FDCAN1 now (false: the controller was not listening).
+  bool DeliverCanFrame(const CanBusFrame& frame);
+  // What a pin drives over a PWM period.
+  OutputWave PinWave(PinId p) const;
+  BridgeDrive HBridge(PinId in1, PinId in2, PinId enable) const;
+
+  // ── Models ──────────────────────────────────────────────────────────────────────
+  Rcc& rcc() { return rcc_; }
+  Pwr& pwr() { return pwr_; }
+  Flash& flash() { return flash_; }
+  GpioPort& gpio(char port) { return *gpio_[static_cast<std::size_t>(port - 'A')]; }
+  const PinMux& pinmux() const { return mux_; }
+  Timer& tim1() { return tim1_; }
+  Timer& tim3() { return tim3_; }
+  Spi& spi1() { return spi1_; }
+  Fdcan& fdcan1() { return fdcan1_; }
+  Iwdg& iwdg() { return iwdg_; }
+  Cortex& cortex() { return cortex_; }
+  ViolationLog& violations() { return log_; }
+
+ private:
+  struct Route {
+    Peripheral* model;
+    std::uint32_t offset;
+    std::optional<Gate> gate;
+    int kind;  // 0 registers, 1 flash array, 2 FDCAN RAM, 3 FDCAN config
+  };
+  std::optional<Route> Decode(std::uint32_t address);
+  void Sync(Picoseconds t);
+  void AdvanceModels(Picoseconds t);
+  void UpdateGates();
+  void ServiceInterrupts();
+  bool LineHigh(int irq) const;
+  int CurrentPriority() const;
+  void DoReset(ResetCause cause);
+  void OnPinLevel(PinId p, bool level);
+  Drive AfDrive(PinId p) const;
+  void CheckClocks() { rules_.Check(now_, flash_.latency()); }
+
+  ChipConfig config_;
+  ViolationLog log_;
+  Picoseconds now_ = 0;
+  std::uint64_t cycles_ = 0;
+  unsigned __int128 cycle_remainder_ = 0;
+  Picoseconds limit_ = kNever;
+  Rcc rcc_;
+  Pwr pwr_;
+  ClockRules rules_;
+  Flash flash_;
+  std::array<std::unique_ptr<GpioPort>, 7> gpio_;
+  PinMux mux_;
+  Timer tim1_, tim3_;
+  Spi spi1_;
+  Fdcan fdcan1_;
+  Iwdg iwdg_;
+  Cortex cortex_;
+  std::unique_ptr<As5047p> as5047p_;
+  SpiWiring spi_wiring_;
+  std::optional<PinId> enc_a_, enc_b_, can_tx_, can_rx_;
+  std::int64_t encoder_pos_ = 0;
+  std::multimap<Picoseconds, std::function<void()>> events_;
+  std::map<int, std::function<void()>> handlers_;
+  std::vector<int> active_stack_;
+  bool primask_ = false;
+  bool in_service_ = false;
+  int resets_ = 0;
+  std::optional<ResetCause> reset_pending_;
+  std::function<void(ResetCause)> reset_handler_;
+};
+
+}  // namespace mjc::g474model

@@ -1,0 +1,248 @@
+#include "mjc/g474model/gpio.h"
+
+#include <string>
+
+namespace mjc::g474model {
+
+const char* SignalName(Signal s) {
+  switch (s) {
+    case Signal::kNone:
+      return "none";
+    case Signal::kTim1Ch1:
+      return "TIM1_CH1";
+    case Signal::kTim1Ch1n:
+      return "TIM1_CH1N";
+    case Signal::kTim1Ch2:
+      return "TIM1_CH2";
+    case Signal::kTim1Ch2n:
+      return "TIM1_CH2N";
+    case Signal::kTim1Ch3:
+      return "TIM1_CH3";
+    case Signal::kTim1Ch3n:
+      return "TIM1_CH3N";
+    case Signal::kTim1Ch4:
+      return "TIM1_CH4";
+    case Signal::kTim3Ch1:
+      return "TIM3_CH1";
+    case Signal::kTim3Ch2:
+      return "TIM3_CH2";
+    case Signal::kTim3Ch3:
+      return "TIM3_CH3";
+    case Signal::kTim3Ch4:
+      return "TIM3_CH4";
+    case Signal::kSpi1Sck:
+      return "SPI1_SCK";
+    case Signal::kSpi1Miso:
+      return "SPI1_MISO";
+    case Signal::kSpi1Mosi:
+      return "SPI1_MOSI";
+    case Signal::kSpi1Nss:
+      return "SPI1_NSS";
+    case Signal::kFdcan1Rx:
+      return "FDCAN1_RX";
+    case Signal::kFdcan1Tx:
+      return "FDCAN1_TX";
+  }
+  return "?";
+}
+
+std::string PinName(PinId p) {
+  return std::string("P") + static_cast<char>('A' + p.port) + std::to_string(p.pin);
+}
+
+const std::array<AfEntry, 40>& AlternateFunctionTable() {
+  // DS12288 Table 13 (LQFP64 pins), via ST's Open Pin Data (see gpio.h).
+  static const std::array<AfEntry, 40> kTable = {{
+      {Pin('A', 8), 6, Signal::kTim1Ch1},   {Pin('C', 0), 2, Signal::kTim1Ch1},
+      {Pin('A', 9), 6, Signal::kTim1Ch2},   {Pin('C', 1), 2, Signal::kTim1Ch2},
+      {Pin('A', 10), 6, Signal::kTim1Ch3},  {Pin('C', 2), 2, Signal::kTim1Ch3},
+      {Pin('A', 11), 11, Signal::kTim1Ch4}, {Pin('C', 3), 2, Signal::kTim1Ch4},
+      {Pin('A', 7), 6, Signal::kTim1Ch1n},  {Pin('A', 11), 6, Signal::kTim1Ch1n},
+      {Pin('B', 13), 6, Signal::kTim1Ch1n}, {Pin('C', 13), 4, Signal::kTim1Ch1n},
+      {Pin('A', 12), 6, Signal::kTim1Ch2n}, {Pin('B', 0), 6, Signal::kTim1Ch2n},
+      {Pin('B', 14), 6, Signal::kTim1Ch2n}, {Pin('B', 1), 6, Signal::kTim1Ch3n},
+      {Pin('B', 9), 12, Signal::kTim1Ch3n}, {Pin('B', 15), 4, Signal::kTim1Ch3n},
+      {Pin('F', 0), 6, Signal::kTim1Ch3n},  {Pin('A', 6), 2, Signal::kTim3Ch1},
+      {Pin('B', 4), 2, Signal::kTim3Ch1},   {Pin('C', 6), 2, Signal::kTim3Ch1},
+      {Pin('A', 4), 2, Signal::kTim3Ch2},   {Pin('A', 7), 2, Signal::kTim3Ch2},
+      {Pin('B', 5), 2, Signal::kTim3Ch2},   {Pin('C', 7), 2, Signal::kTim3Ch2},
+      {Pin('B', 0), 2, Signal::kTim3Ch3},   {Pin('B', 1), 2, Signal::kTim3Ch4},
+      {Pin('A', 5), 5, Signal::kSpi1Sck},   {Pin('B', 3), 5, Signal::kSpi1Sck},
+      {Pin('A', 6), 5, Signal::kSpi1Miso},  {Pin('B', 4), 5, Signal::kSpi1Miso},
+      {Pin('A', 7), 5, Signal::kSpi1Mosi},  {Pin('B', 5), 5, Signal::kSpi1Mosi},
+      {Pin('A', 4), 5, Signal::kSpi1Nss},   {Pin('A', 11), 9, Signal::kFdcan1Rx},
+      {Pin('B', 8), 9, Signal::kFdcan1Rx},  {Pin('A', 12), 9, Signal::kFdcan1Tx},
+      {Pin('B', 9), 9, Signal::kFdcan1Tx},  {Pin('A', 15), 5, Signal::kSpi1Nss},
+  }};
+  return kTable;
+}
+
+GpioPort::GpioPort(int port, ViolationLog* log) : port_(port), log_(log) { Reset(); }
+
+void GpioPort::Reset() {
+  // Reset values (SVD v2.9): port A keeps PA13/PA14/PA15 as SWD/JTAG (AF, pulls),
+  // port B PB3/PB4 likewise; every other pin is analog (11).
+  moder_ = port_ == 0 ? 0xABFFFFFFu : port_ == 1 ? 0xFFFFFEBFu : 0xFFFFFFFFu;
+  ospeedr_ = port_ == 0 ? 0x0C000000u : port_ == 1 ? 0x000000C0u : 0;
+  pupdr_ = port_ == 0 ? 0x64000000u : port_ == 1 ? 0x00000100u : 0;
+  otyper_ = odr_ = lckr_ = afrl_ = afrh_ = 0;
+  Refresh();
+}
+
+std::optional<bool> GpioPort::Level(int pin) const {
+  const PinId id{static_cast<std::uint8_t>(port_), static_cast<std::uint8_t>(pin)};
+  const auto ext = external_[static_cast<std::size_t>(pin)];
+  std::optional<bool> driven;
+  switch (mode(pin)) {
+    case PinMode::kOutput:
+      if (!(odr(pin) && open_drain(pin))) driven = odr(pin);
+      break;
+    case PinMode::kAlternate:
+      if (af_drive_) {
+        const Drive d = af_drive_(id);
+        if (d != Drive::kHighZ && !(d == Drive::kHigh && open_drain(pin))) {
+          driven = d == Drive::kHigh;
+        }
+      }
+      break;
+    case PinMode::kAnalog:
+      return ext;
+    default:
+      break;
+  }
+  if (driven) return driven;
+  if (ext) return ext;
+  if (pull(pin) == 1) return true;
+  if (pull(pin) == 2) return false;
+  return std::nullopt;
+}
+
+void GpioPort::Refresh() {
+  for (int pin = 0; pin < 16; ++pin) {
+    const bool level = Level(pin).value_or(false);
+    if (level != last_level_[static_cast<std::size_t>(pin)]) {
+      last_level_[static_cast<std::size_t>(pin)] = level;
+      if (level_hook_) {
+        level_hook_(
+            PinId{static_cast<std::uint8_t>(port_), static_cast<std::uint8_t>(pin)},
+            level);
+      }
+    }
+  }
+}
+
+void GpioPort::DriveInput(int pin, std::optional<bool> level) {
+  external_[static_cast<std::size_t>(pin)] = level;
+  Refresh();
+}
+
+bool GpioPort::Read(const Access& a, std::uint32_t* v) {
+  switch (a.offset) {
+    case 0x00:
+      *v = moder_;
+      return true;
+    case 0x04:
+      *v = otyper_;
+      return true;
+    case 0x08:
+      *v = ospeedr_;
+      return true;
+    case 0x0C:
+      *v = pupdr_;
+      return true;
+    case 0x10: {
+      std::uint32_t idr = 0;
+      for (int pin = 0; pin < 16; ++pin) {
+        if (mode(pin) != PinMode::kAnalog && Level(pin).value_or(false)) idr |= 1u << pin;
+      }
+      *v = idr;
+      return true;
+    }
+    case 0x14:
+      *v = odr_;
+      return true;
+    case 0x18:
+      *v = 0;
+      return true;  // BSRR is write-only
+    case 0x1C:
+      *v = lckr_;
+      return true;
+    case 0x20:
+      *v = afrl_;
+      return true;
+    case 0x24:
+      *v = afrh_;
+      return true;
+    case 0x28:
+      *v = 0;
+      return true;
+    default:
+      return false;
+  }
+}
+
+bool GpioPort::Write(const Access& a) {
+  switch (a.offset) {
+    case 0x00:
+      a.Apply(&moder_);
+      break;
+    case 0x04:
+      a.Apply(&otyper_, 0xFFFFu);
+      break;
+    case 0x08:
+      a.Apply(&ospeedr_);
+      break;
+    case 0x0C:
+      a.Apply(&pupdr_);
+      break;
+    case 0x10:
+      return true;  // IDR is read-only
+    case 0x14:
+      a.Apply(&odr_, 0xFFFFu);
+      break;
+    case 0x18: {
+      // "If both BSx and BRx are set, BSx has priority."
+      const std::uint32_t v = a.value & a.mask;
+      odr_ = (odr_ & ~(v >> 16)) | (v & 0xFFFFu);
+      break;
+    }
+    case 0x1C:
+      a.Apply(&lckr_, 0x1FFFFu);
+      break;
+    case 0x20:
+      a.Apply(&afrl_);
+      break;
+    case 0x24:
+      a.Apply(&afrh_);
+      break;
+    case 0x28:
+      odr_ &= ~(a.value & a.mask & 0xFFFFu);
+      break;
+    default:
+      return false;
+  }
+  (void)log_;
+  Refresh();
+  return true;
+}
+
+Signal PinMux::SignalOn(PinId p) const {
+  const GpioPort& gp = port(p.port);
+  if (gp.mode(p.pin) != PinMode::kAlternate) return Signal::kNone;
+  const unsigned af = gp.af(p.pin);
+  for (const auto& e : AlternateFunctionTable()) {
+    if (e.pin == p && e.af == af) return e.signal;
+  }
+  return Signal::kNone;
+}
+
+std::optional<PinId> PinMux::PinCarrying(Signal s) const {
+  for (std::uint8_t port = 0; port < 7; ++port) {
+    for (std::uint8_t pin = 0; pin < 16; ++pin) {
+      if (SignalOn(PinId{port, pin}) == s) return PinId{port, pin};
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace mjc::g474model

@@ -1,0 +1,626 @@
+#include "mjc/g474model/virtual_chip.h"
+
+#include <cstdio>
+#include <string>
+
+namespace mjc::g474model {
+namespace {
+std::string Hex(std::uint32_t v) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%08X", v);
+  return b;
+}
+constexpr int kIrqs[] = {irq::kFlash,  irq::kFdcan1It0, irq::kFdcan1It1,
+                         irq::kTim1Up, irq::kTim3,      irq::kSpi1};
+}  // namespace
+
+const char* ResetCauseName(ResetCause c) {
+  switch (c) {
+    case ResetCause::kSoftware:
+      return "software (AIRCR.SYSRESETREQ)";
+    case ResetCause::kIwdg:
+      return "independent watchdog";
+    case ResetCause::kPowerCut:
+      return "power cut";
+  }
+  return "?";
+}
+
+VirtualChip::VirtualChip(ChipConfig config)
+    : config_(std::move(config)),
+      rcc_(&log_, config_.rcc),
+      pwr_(&log_),
+      rules_(&log_, &rcc_, &pwr_),
+      flash_(&log_, config_.flash),
+      gpio_{std::make_unique<GpioPort>(0, &log_), std::make_unique<GpioPort>(1, &log_),
+            std::make_unique<GpioPort>(2, &log_), std::make_unique<GpioPort>(3, &log_),
+            std::make_unique<GpioPort>(4, &log_), std::make_unique<GpioPort>(5, &log_),
+            std::make_unique<GpioPort>(6, &log_)},
+      mux_({gpio_[0].get(), gpio_[1].get(), gpio_[2].get(), gpio_[3].get(),
+            gpio_[4].get(), gpio_[5].get(), gpio_[6].get()}),
+      tim1_(Timer::Kind::kAdvanced, "TIM1", &log_, &rcc_),
+      tim3_(Timer::Kind::kGeneral16, "TIM3", &log_, &rcc_),
+      spi1_(&log_, &rcc_),
+      fdcan1_(&log_, &rcc_),
+      iwdg_(&log_, &rcc_),
+      cortex_(&log_, &cycles_) {
+  rcc_.SetClockChangeHook([this] { CheckClocks(); });
+  pwr_.SetChangeHook([this] { CheckClocks(); });
+  rcc_.SetPeripheralResetHook([this](Gate g) {
+    switch (g) {
+      case Gate::kTim1:
+        tim1_.Reset();
+        break;
+      case Gate::kTim3:
+        tim3_.Reset();
+        break;
+      case Gate::kSpi1:
+        spi1_.Reset();
+        break;
+      case Gate::kFdcan:
+        fdcan1_.Reset();
+        break;
+      case Gate::kPwr:
+        pwr_.Reset();
+        break;
+      default:
+        if (g >= Gate::kGpioA && g <= Gate::kGpioG) {
+          gpio_[static_cast<std::size_t>(g) - static_cast<std::size_t>(Gate::kGpioA)]
+              ->Reset();
+        }
+    }
+  });
+  iwdg_.SetExpiryHook([this] { reset_pending_ = ResetCause::kIwdg; });
+  cortex_.SetResetRequestHook([this] { reset_pending_ = ResetCause::kSoftware; });
+  flash_.SetPowerCutHook([this] { reset_pending_ = ResetCause::kPowerCut; });
+  for (auto& g : gpio_) {
+    g->SetAfDriveSource([this](PinId p) { return AfDrive(p); });
+    g->SetLevelHook([this](PinId p, bool level) { OnPinLevel(p, level); });
+  }
+  spi1_.SetBus([this](const SpiFrame& f) -> std::uint16_t {
+    if (!as5047p_ || !as5047p_->selected()) return 0;  // MISO floats: reads 0
+    const bool sck = mux_.PinCarrying(Signal::kSpi1Sck) == spi_wiring_.sck;
+    const bool mosi = mux_.PinCarrying(Signal::kSpi1Mosi) == spi_wiring_.mosi;
+    const bool miso = mux_.PinCarrying(Signal::kSpi1Miso) == spi_wiring_.miso;
+    if (!sck) return 0;  // the sensor sees no clock
+    SpiFrame seen = f;
+    if (!mosi) seen.mosi = 0;
+    const std::uint16_t answer = as5047p_->Exchange(seen);
+    return miso ? answer : 0;
+  });
+  spi1_.SetFrameStartHook([this](const SpiFrame& f) {
+    if (as5047p_ && as5047p_->selected() &&
+        mux_.PinCarrying(Signal::kSpi1Sck) == spi_wiring_.sck) {
+      as5047p_->OnFrameStart(f);
+    }
+  });
+  reset_handler_ = [](ResetCause c) { throw ChipReset{c}; };
+  UpdateGates();
+}
+
+VirtualChip::~VirtualChip() = default;
+
+// ── Time ──────────────────────────────────────────────────────────────────────────
+
+void VirtualChip::SpendCycles(std::uint64_t n) {
+  double f = rcc_.sysclk_hz();
+  if (f <= 0) {
+    log_.Report(now_, "RCC", "the system clock is stopped (SYSCLK = 0): the CPU halts");
+    f = 16e6;
+  }
+  cycles_ += n;
+  const auto hz = static_cast<unsigned __int128>(f);
+  cycle_remainder_ += static_cast<unsigned __int128>(n) * kPsPerSecond;
+  const auto ps = cycle_remainder_ / hz;
+  cycle_remainder_ %= hz;
+  Sync(now_ + static_cast<Picoseconds>(ps));
+}
+
+void VirtualChip::AdvanceTo(Picoseconds t) {
+  // Step through every model event on the way, so that interrupts and resets happen
+  // at their own time rather than at `t`.
+  while (now_ < t) {
+    Picoseconds next = t;
+    for (Peripheral* p : std::initializer_list<Peripheral*>{
+             &rcc_, &pwr_, &flash_, &tim1_, &tim3_, &spi1_, &fdcan1_, &iwdg_}) {
+      const Picoseconds e = p->NextEvent();
+      if (e > now_ && e < next) next = e;
+    }
+    Sync(next);
+    ServiceInterrupts();
+  }
+}
+
+void VirtualChip::Schedule(Picoseconds at, std::function<void()> fn) {
+  events_.emplace(at, std::move(fn));
+}
+
+void VirtualChip::AdvanceModels(Picoseconds t) {
+  now_ = t;
+  UpdateGates();
+  rcc_.Advance(t);
+  pwr_.Advance(t);
+  flash_.Advance(t);
+  tim1_.Advance(t);
+  tim3_.Advance(t);
+  spi1_.Advance(t);
+  if (can_tx_ || can_rx_) {
+    fdcan1_.SetPinsRouted(!can_tx_ || mux_.PinCarrying(Signal::kFdcan1Tx) == can_tx_,
+                          !can_rx_ || mux_.PinCarrying(Signal::kFdcan1Rx) == can_rx_);
+  }
+  fdcan1_.Advance(t);
+  iwdg_.Advance(t);
+  cortex_.Advance(t);
+}
+
+void VirtualChip::Sync(Picoseconds t) {
+  if (t > limit_) {
+    AdvanceModels(limit_);
+    throw TimeLimitReached{limit_};
+  }
+  // World events in time order, the models brought to each event's time first.
+  while (!events_.empty() && events_.begin()->first <= t) {
+    auto it = events_.begin();
+    const Picoseconds at = it->first < now_ ? now_ : it->first;
+    auto fn = std::move(it->second);
+    events_.erase(it);
+    AdvanceModels(at);
+    if (reset_pending_) DoReset(*reset_pending_);
+    fn();
+  }
+  AdvanceModels(t > now_ ? t : now_);
+  if (reset_pending_) DoReset(*reset_pending_);
+}
+
+void VirtualChip::UpdateGates() {
+  tim1_.SetClockOn(rcc_.ClockEnabled(Gate::kTim1));
+  tim3_.SetClockOn(rcc_.ClockEnabled(Gate::kTim3));
+  spi1_.SetClockOn(rcc_.ClockEnabled(Gate::kSpi1));
+  fdcan1_.SetClockOn(rcc_.ClockEnabled(Gate::kFdcan));
+}
+
+// ── Bus ───────────────────────────────────────────────────────────────────────────
+
+std::optional<VirtualChip::Route> VirtualChip::Decode(std::uint32_t a) {
+  if (Flash::InArray(a) || Flash::InInfo(a)) return Route{&flash_, a, std::nullopt, 1};
+  if (a >= 0xE0000000u && a < 0xE0100000u) {
+    return Route{&cortex_, a - Cortex::kBase, std::nullopt, 0};
+  }
+  if (a >= Fdcan::kRamBase && a < Fdcan::kRamBase + Fdcan::kRamSize) {
+    return Route{&fdcan1_, a - Fdcan::kRamBase, Gate::kFdcan, 2};
+  }
+  struct Block {
+    std::uint32_t base, size;
+    Peripheral* model;
+    std::optional<Gate> gate;
+    int kind;
+  };
+  const Block blocks[] = {
+      {Timer::kTim3Base, 0x400, &tim3_, Gate::kTim3, 0},
+      {Iwdg::kBase, 0x400, &iwdg_, std::nullopt, 0},
+      {Fdcan::kFdcan1Base, 0x100, &fdcan1_, Gate::kFdcan, 0},
+      {Fdcan::kConfigBase, 0x300, &fdcan1_, Gate::kFdcan, 3},
+      {Pwr::kBase, 0x400, &pwr_, Gate::kPwr, 0},
+      {Timer::kTim1Base, 0x400, &tim1_, Gate::kTim1, 0},
+      {Spi::kSpi1Base, 0x400, &spi1_, Gate::kSpi1, 0},
+      {Rcc::kBase, 0x400, &rcc_, std::nullopt, 0},
+      {Flash::kBase, 0x400, &flash_, Gate::kFlash, 0},
+  };
+  for (const auto& b : blocks) {
+    if (a >= b.base && a < b.base + b.size)
+      return Route{b.model, a - b.base, b.gate, b.kind};
+  }
+  if (a >= GpioPort::kBase && a < GpioPort::kBase + 7 * 0x400) {
+    const std::uint32_t port = (a - GpioPort::kBase) / 0x400;
+    return Route{gpio_[port].get(), (a - GpioPort::kBase) % 0x400,
+                 static_cast<Gate>(static_cast<unsigned>(Gate::kGpioA) + port), 0};
+  }
+  return std::nullopt;
+}
+
+std::uint32_t VirtualChip::Read(stm32g4::Address address, unsigned bytes) {
+  SpendCycles(config_.access_cycles);
+  if ((bytes != 2 && bytes != 4) || address % bytes != 0) {
+    log_.Report(now_, "bus", "unaligned or odd-sized read at " + Hex(address));
+    return 0;
+  }
+  const auto route = Decode(address);
+  if (!route) {
+    log_.Report(now_, "bus",
+                "read at " + Hex(address) + ": no modelled peripheral there");
+    ServiceInterrupts();
+    return 0;
+  }
+  if (route->gate && !rcc_.ClockEnabled(*route->gate)) {
+    log_.Report(now_, "bus",
+                "read at " + Hex(address) +
+                    " with the block's clock off in "
+                    "RCC: reads 0");
+    ServiceInterrupts();
+    return 0;
+  }
+  std::uint32_t value = 0;
+  bool ok = false;
+  if (route->kind == 1) {
+    for (int tries = 0; tries < 3; ++tries) {
+      ok = flash_.ReadMemory(address, bytes, &value);
+      if (ok) break;
+      const Picoseconds stall = flash_.TakeStall();
+      if (stall == 0) break;
+      Sync(stall);  // the bus waits for the busy bank
+    }
+    if (!ok) log_.Report(now_, "bus", "read at " + Hex(address) + " outside the flash");
+    ServiceInterrupts();
+    return value;
+  }
+  Access acc;
+  acc.offset = route->offset & ~3u;
+  acc.bytes = bytes;
+  const unsigned shift = 8 * (route->offset & 3u);
+  acc.mask = bytes == 4 ? 0xFFFFFFFFu : (0xFFFFu << shift);
+  std::uint32_t word = 0;
+  if (route->kind == 2) {
+    ok = fdcan1_.ReadRam(acc, &word);
+  } else if (route->kind == 3) {
+    ok = fdcan1_.ReadConfig(acc, &word);
+  } else {
+    ok = route->model->Read(acc, &word);
+  }
+  if (!ok) {
+    log_.Report(now_, "bus", "read at " + Hex(address) + ": reserved register");
+    word = 0;
+  }
+  value = bytes == 4 ? word : (word >> shift) & 0xFFFFu;
+  ServiceInterrupts();
+  return value;
+}
+
+void VirtualChip::Write(stm32g4::Address address, std::uint32_t value, unsigned bytes) {
+  SpendCycles(config_.access_cycles);
+  if ((bytes != 2 && bytes != 4) || address % bytes != 0) {
+    log_.Report(now_, "bus", "unaligned or odd-sized write at " + Hex(address));
+    return;
+  }
+  const auto route = Decode(address);
+  if (!route) {
+    log_.Report(now_, "bus",
+                "write at " + Hex(address) + ": no modelled peripheral there");
+    ServiceInterrupts();
+    return;
+  }
+  if (route->gate && !rcc_.ClockEnabled(*route->gate)) {
+    log_.Report(
+        now_, "bus",
+        "write at " + Hex(address) + " with the block's clock off in RCC: ignored");
+    ServiceInterrupts();
+    return;
+  }
+  if (route->kind == 1) {
+    bool ok = false;
+    for (int tries = 0; tries < 3 && !ok; ++tries) {
+      if (!Flash::InArray(address)) break;
+      ok = flash_.WriteMemory(address, value, bytes);
+      if (!ok) {
+        const Picoseconds stall = flash_.TakeStall();
+        if (stall == 0) break;
+        Sync(stall);
+      }
+    }
+    if (!ok) log_.Report(now_, "bus", "write at " + Hex(address) + " not taken");
+    ServiceInterrupts();
+    return;
+  }
+  Access acc;
+  acc.offset = route->offset & ~3u;
+  acc.bytes = bytes;
+  const unsigned shift = 8 * (route->offset & 3u);
+  acc.mask = bytes == 4 ? 0xFFFFFFFFu : (0xFFFFu << shift);
+  acc.value = bytes == 4 ? value : (value & 0xFFFFu) << shift;
+  bool ok = false;
+  if (route->kind == 2) {
+    ok = fdcan1_.WriteRam(acc);
+  } else if (route->kind == 3) {
+    ok = fdcan1_.WriteConfig(acc);
+  } else {
+    ok = route->model->Write(acc);
+  }
+  if (!ok) log_.Report(now_, "bus", "write at " + Hex(address) + ": reserved register");
+  if (route->model == &flash_ && acc.offset == 0) CheckClocks();
+  UpdateGates();
+  if (reset_pending_) DoReset(*reset_pending_);
+  ServiceInterrupts();
+}
+
+// ── Interrupts ────────────────────────────────────────────────────────────────────
+
+bool VirtualChip::LineHigh(int n) const {
+  switch (n) {
+    case irq::kFlash:
+      return flash_.irq();
+    case irq::kFdcan1It0:
+      return fdcan1_.line0();
+    case irq::kFdcan1It1:
+      return fdcan1_.line1();
+    case irq::kTim1Up:
+      return tim1_.update_irq();
+    case irq::kTim3:
+      return tim3_.update_irq();
+    case irq::kSpi1:
+      return spi1_.irq();
+    default:
+      return false;
+  }
+}
+
+int VirtualChip::CurrentPriority() const {
+  if (active_stack_.empty()) return 256;  // thread mode
+  return static_cast<int>(cortex_.GroupPriority(cortex_.priority(active_stack_.back())));
+}
+
+void VirtualChip::SetHandler(int n, std::function<void()> handler) {
+  handlers_[n] = std::move(handler);
+}
+
+void VirtualChip::MaskInterrupts(bool masked) {
+  primask_ = masked;
+  if (!masked) ServiceInterrupts();
+}
+
+void VirtualChip::ServiceInterrupts() {
+  for (;;) {
+    for (int n : kIrqs) {
+      if (LineHigh(n) && !cortex_.active(n)) cortex_.SetPending(n, true);
+    }
+    if (primask_) return;
+    int best = -1;
+    std::uint32_t best_priority = 0;
+    for (int n = 0; n < Cortex::kIrqCount; ++n) {
+      if (!cortex_.pending(n) || !cortex_.enabled(n) || cortex_.active(n)) continue;
+      const std::uint32_t p = cortex_.priority(n);
+      if (best < 0 || p < best_priority) best = n, best_priority = p;
+    }
+    if (best < 0 || static_cast<int>(cortex_.GroupPriority(cortex_.priority(best))) >=
+                        CurrentPriority()) {
+      return;
+    }
+    cortex_.SetPending(best, false);
+    cortex_.SetActive(best, true);
+    active_stack_.push_back(best);
+    struct Exit {
+      VirtualChip* chip;
+      int n;
+      bool done = false;
+      ~Exit() {
+        if (!done && !chip->active_stack_.empty()) {
+          chip->active_stack_.pop_back();
+          chip->cortex_.SetActive(n, false);
+        }
+      }
+    } exit{this, best};
+    SpendCycles(config_.exception_cycles);
+    auto it = handlers_.find(best);
+    if (it == handlers_.end() || !it->second) {
+      log_.Report(now_, "NVIC",
+                  "IRQ " + std::to_string(best) +
+                      " taken with no handler registered (the default handler loops)");
+      // Keep the IRQ from being taken again forever: disable it.
+      Access a;
+      a.offset = 0xE180 + 4 * static_cast<std::uint32_t>(best / 32);
+      a.value = 1u << (best % 32);
+      cortex_.Write(a);
+    } else {
+      it->second();
+    }
+    active_stack_.pop_back();
+    cortex_.SetActive(best, false);
+    exit.done = true;
+    SpendCycles(config_.exception_cycles);
+  }
+}
+
+void VirtualChip::WaitForInterrupt() {
+  // Sleep until an interrupt is pending and enabled (with PRIMASK set, WFI still wakes
+  // on it, the handler runs after PRIMASK is cleared).
+  for (int guard = 0; guard < 10'000'000; ++guard) {
+    for (int n : kIrqs) {
+      if (LineHigh(n) && !cortex_.active(n)) cortex_.SetPending(n, true);
+    }
+    for (int n = 0; n < Cortex::kIrqCount; ++n) {
+      if (cortex_.pending(n) && cortex_.enabled(n) &&
+          static_cast<int>(cortex_.GroupPriority(cortex_.priority(n))) <
+              CurrentPriority()) {
+        ServiceInterrupts();
+        return;
+      }
+    }
+    Picoseconds next = events_.empty() ? kNever : events_.begin()->first;
+    for (Peripheral* p : std::initializer_list<Peripheral*>{
+             &rcc_, &pwr_, &flash_, &tim1_, &tim3_, &spi1_, &fdcan1_, &iwdg_}) {
+      const Picoseconds e = p->NextEvent();
+      if (e > now_ && e < next) next = e;
+    }
+    if (next == kNever) {
+      log_.Report(now_, "NVIC",
+                  "WFI with nothing that could wake the core: it sleeps "
+                  "forever");
+      if (limit_ != kNever) Sync(limit_ + 1);
+      return;
+    }
+    Sync(next);
+  }
+}
+
+// ── Resets ────────────────────────────────────────────────────────────────────────
+
+void VirtualChip::PowerCut() {
+  flash_.PowerLost();
+  DoReset(ResetCause::kPowerCut);
+}
+
+void VirtualChip::DoReset(ResetCause cause) {
+  reset_pending_.reset();
+  ++resets_;
+  if (cause == ResetCause::kPowerCut) {
+    flash_.PowerLost();
+    rcc_.Reset();
+    rcc_.PowerOn();
+  } else {
+    rcc_.Reset();
+    // Internal resets drive NRST low too, so PINRSTF is set with the cause's flag.
+    rcc_.SetResetFlags(csr::kPinrstf |
+                       (cause == ResetCause::kIwdg ? csr::kIwdgrstf : csr::kSftrstf));
+  }
+  pwr_.Reset();
+  flash_.Reset();
+  for (auto& g : gpio_) g->Reset();
+  tim1_.Reset();
+  tim3_.Reset();
+  spi1_.Reset();
+  fdcan1_.Reset();
+  iwdg_.Reset();
+  cortex_.Reset();
+  rules_.Reset();
+  active_stack_.clear();
+  primask_ = false;
+  cycle_remainder_ = 0;
+  UpdateGates();
+  if (reset_handler_) reset_handler_(cause);
+}
+
+// ── World ─────────────────────────────────────────────────────────────────────────
+
+void VirtualChip::OnPinLevel(PinId p, bool level) {
+  switch (mux_.SignalOn(p)) {
+    case Signal::kTim3Ch1:
+      tim3_.OnInput(1, level);
+      break;
+    case Signal::kTim3Ch2:
+      tim3_.OnInput(2, level);
+      break;
+    case Signal::kTim1Ch1:
+      tim1_.OnInput(1, level);
+      break;
+    case Signal::kTim1Ch2:
+      tim1_.OnInput(2, level);
+      break;
+    default:
+      break;
+  }
+  if (as5047p_ && p == spi_wiring_.cs) as5047p_->OnChipSelect(level, now_);
+}
+
+Drive VirtualChip::AfDrive(PinId p) const {
+  switch (mux_.SignalOn(p)) {
+    case Signal::kTim1Ch1:
+      return tim1_.Level(1, false);
+    case Signal::kTim1Ch2:
+      return tim1_.Level(2, false);
+    case Signal::kTim1Ch3:
+      return tim1_.Level(3, false);
+    case Signal::kTim1Ch4:
+      return tim1_.Level(4, false);
+    case Signal::kTim1Ch1n:
+      return tim1_.Level(1, true);
+    case Signal::kTim1Ch2n:
+      return tim1_.Level(2, true);
+    case Signal::kTim1Ch3n:
+      return tim1_.Level(3, true);
+    case Signal::kSpi1Sck:
+    case Signal::kSpi1Mosi:
+      return Drive::kLow;
+    case Signal::kFdcan1Tx:
+      return Drive::kHigh;  // recessive
+    default:
+      return Drive::kHighZ;
+  }
+}
+
+OutputWave VirtualChip::PinWave(PinId p) const {
+  const GpioPort& port = *gpio_[p.port];
+  switch (port.mode(p.pin)) {
+    case PinMode::kOutput: {
+      const auto level = port.Level(p.pin);
+      return level ? OutputWave{true, *level ? 1.0 : 0.0} : OutputWave{};
+    }
+    case PinMode::kAlternate:
+      switch (mux_.SignalOn(p)) {
+        case Signal::kTim1Ch1:
+          return tim1_.Wave(1, false);
+        case Signal::kTim1Ch2:
+          return tim1_.Wave(2, false);
+        case Signal::kTim1Ch3:
+          return tim1_.Wave(3, false);
+        case Signal::kTim1Ch4:
+          return tim1_.Wave(4, false);
+        case Signal::kTim1Ch1n:
+          return tim1_.Wave(1, true);
+        case Signal::kTim1Ch2n:
+          return tim1_.Wave(2, true);
+        case Signal::kTim1Ch3n:
+          return tim1_.Wave(3, true);
+        case Signal::kTim3Ch1:
+          return tim3_.Wave(1, false);
+        case Signal::kTim3Ch2:
+          return tim3_.Wave(2, false);
+        case Signal::kTim3Ch3:
+          return tim3_.Wave(3, false);
+        case Signal::kTim3Ch4:
+          return tim3_.Wave(4, false);
+        default:
+          return {};
+      }
+    default:
+      return {};
+  }
+}
+
+BridgeDrive VirtualChip::HBridge(PinId in1, PinId in2, PinId enable) const {
+  const OutputWave a = PinWave(in1), b = PinWave(in2);
+  const auto en = gpio_[enable.port]->Level(enable.pin);
+  BridgeDrive d;
+  d.floating = !a.driven || !b.driven || !en;
+  d.enabled = en.value_or(false) && a.driven && b.driven;
+  d.duty = (a.driven ? a.duty : 0) - (b.driven ? b.duty : 0);
+  return d;
+}
+
+void VirtualChip::AttachEncoder(PinId a, PinId b) {
+  enc_a_ = a;
+  enc_b_ = b;
+  const int phase = static_cast<int>(encoder_pos_ & 3);
+  gpio_[a.port]->DriveInput(a.pin, phase == 1 || phase == 2);
+  gpio_[b.port]->DriveInput(b.pin, phase >= 2);
+}
+
+void VirtualChip::MoveEncoder(std::int64_t position) {
+  if (!enc_a_ || !enc_b_) return;
+  while (encoder_pos_ != position) {
+    encoder_pos_ += position > encoder_pos_ ? 1 : -1;
+    // Quadrature states (A, B) for position mod 4: 00, 10, 11, 01 (forward = A leads).
+    const int phase = static_cast<int>(encoder_pos_ & 3);
+    gpio_[enc_a_->port]->DriveInput(enc_a_->pin, phase == 1 || phase == 2);
+    gpio_[enc_b_->port]->DriveInput(enc_b_->pin, phase >= 2);
+  }
+}
+
+As5047p& VirtualChip::AttachAs5047p(SpiWiring wiring) {
+  spi_wiring_ = wiring;
+  as5047p_ = std::make_unique<As5047p>(&log_);
+  const auto cs = gpio_[wiring.cs.port]->Level(wiring.cs.pin);
+  as5047p_->OnChipSelect(cs.value_or(true), now_);
+  return *as5047p_;
+}
+
+void VirtualChip::AttachCanTransceiver(PinId tx, PinId rx) {
+  can_tx_ = tx;
+  can_rx_ = rx;
+}
+
+bool VirtualChip::DeliverCanFrame(const CanBusFrame& frame) {
+  Sync(now_);
+  const bool taken = fdcan1_.Receive(frame);
+  ServiceInterrupts();
+  return taken;
+}
+
+}  // namespace mjc::g474model

@@ -1,0 +1,166 @@
+// FLASH against RM0440 §5: the key sequence and its lock, erase/program rules and
+// their error flags, busy times, power cuts (seeded).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <string>
+
+#include "mjc/g474model/virtual_chip.h"
+
+namespace {
+
+using namespace mjc::g474model;
+
+constexpr std::uint32_t kF = 0x40022000, kKeyr = kF + 0x08, kSr = kF + 0x10,
+                        kCr = kF + 0x14;
+
+void Unlock(VirtualChip& c) {
+  c.Write(kKeyr, Flash::kKey1, 4);
+  c.Write(kKeyr, Flash::kKey2, 4);
+}
+void WaitIdle(VirtualChip& c) {
+  while (c.Read(kSr, 4) & Flash::kBsy) {
+  }
+}
+void ErasePage(VirtualChip& c, std::uint32_t page, bool bank2) {
+  c.Write(kCr, (1u << 1) | (page << 3) | (bank2 ? 1u << 11 : 0), 4);
+  c.Write(kCr, c.Read(kCr, 4) | (1u << 16), 4);
+  WaitIdle(c);
+  c.Write(kCr, 0, 4);
+}
+void Program(VirtualChip& c, std::uint32_t address, std::uint64_t v) {
+  c.Write(kCr, 1u, 4);
+  c.Write(address, static_cast<std::uint32_t>(v), 4);
+  c.Write(address + 4, static_cast<std::uint32_t>(v >> 32), 4);
+  WaitIdle(c);
+  c.Write(kCr, 0, 4);
+}
+
+TEST(G474Flash, LockedUntilTheKeysAndAWrongKeyLocksUntilReset) {
+  VirtualChip c;
+  c.SetResetHandler([](ResetCause) {});
+  EXPECT_TRUE(c.Read(kCr, 4) & (1u << 31));
+  c.Write(kKeyr, Flash::kKey1, 4);
+  c.Write(kKeyr, 0x12345678, 4);  // wrong second key
+  EXPECT_TRUE(c.violations().Contains("bus", "KEYR"));
+  Unlock(c);
+  EXPECT_TRUE(c.Read(kCr, 4) & (1u << 31)) << "a wrong key locks until reset";
+  c.Write(0xE000ED0C, (0x05FAu << 16) | 4u, 4);  // system reset
+  Unlock(c);
+  EXPECT_FALSE(c.Read(kCr, 4) & (1u << 31));
+}
+
+TEST(G474Flash, EraseAndProgramTakeTheirDatasheetTimes) {
+  VirtualChip c;
+  Unlock(c);
+  const Picoseconds t0 = c.now();
+  ErasePage(c, 5, false);
+  EXPECT_NEAR(static_cast<double>(c.now() - t0) * 1e-12, 22.02e-3, 1e-5);
+  const Picoseconds t1 = c.now();
+  Program(c, 0x08000000 + 5 * 2048, 0x1122334455667788ull);
+  EXPECT_NEAR(static_cast<double>(c.now() - t1) * 1e-12, 81.7e-6, 2e-6);
+  EXPECT_EQ(c.Read(0x08000000 + 5 * 2048, 4), 0x55667788u);
+  EXPECT_EQ(c.Read(0x08000000 + 5 * 2048 + 4, 4), 0x11223344u);
+  EXPECT_EQ(c.Read(kSr, 4), 0u) << "EOP only with EOPIE";
+}
+
+TEST(G474Flash, BankTwoPagesAreSelectedByBker) {
+  VirtualChip c;
+  Unlock(c);
+  Program(c, 0x08040000 + 3 * 2048, 0);  // all zeros: allowed anywhere
+  ErasePage(c, 3, /*bank2=*/false);      // bank 1 page 3: not ours
+  EXPECT_EQ(c.Read(0x08040000 + 3 * 2048, 4), 0u);
+  ErasePage(c, 3, /*bank2=*/true);
+  EXPECT_EQ(c.Read(0x08040000 + 3 * 2048, 4), 0xFFFFFFFFu);
+}
+
+TEST(G474Flash, ProgrammingErrors) {
+  VirtualChip c;
+  Unlock(c);
+  const std::uint32_t a = 0x08001000;
+  Program(c, a, 0xAAAAAAAAAAAAAAAAull);
+  Program(c, a, 0x5555555555555555ull);  // not erased
+  EXPECT_TRUE(c.Read(kSr, 4) & Flash::kProgerr);
+  EXPECT_EQ(c.Read(a, 4), 0xAAAAAAAAu);
+  c.Write(kSr, Flash::kProgerr, 4);  // write 1 to clear
+  EXPECT_EQ(c.Read(kSr, 4), 0u);
+  Program(c, a, 0);  // all zeros over a programmed double word: allowed
+  EXPECT_EQ(c.Read(kSr, 4), 0u);
+  EXPECT_EQ(c.Read(a, 4), 0u);
+  // First word not 8-aligned.
+  c.Write(kCr, 1u, 4);
+  c.Write(a + 12, 1, 4);
+  EXPECT_TRUE(c.Read(kSr, 4) & Flash::kPgaerr);
+  c.Write(kSr, 0xFFFF, 4);
+  // Half-word write.
+  c.Write(a + 16, 1, 2);
+  EXPECT_TRUE(c.Read(kSr, 4) & Flash::kSizerr);
+  c.Write(kSr, 0xFFFF, 4);
+  // Second word elsewhere.
+  c.Write(a + 16, 1, 4);
+  c.Write(a + 24, 1, 4);
+  EXPECT_TRUE(c.Read(kSr, 4) & Flash::kPgaerr);
+  c.Write(kSr, 0xFFFF, 4);
+  c.Write(kCr, 0, 4);
+  // A write without PG.
+  c.Write(a + 32, 1, 4);
+  EXPECT_TRUE(c.Read(kSr, 4) & Flash::kPgserr);
+  // With the error still set, the next erase does not start.
+  c.Write(kCr, (1u << 1) | (2u << 3), 4);
+  c.Write(kCr, c.Read(kCr, 4) | (1u << 16), 4);
+  EXPECT_FALSE(c.Read(kSr, 4) & Flash::kBsy);
+}
+
+TEST(G474Flash, ReadingTheBusyBankStallsUntilTheEraseEnds) {
+  VirtualChip c;
+  Unlock(c);
+  c.Write(kCr, (1u << 1) | (4u << 3), 4);
+  c.Write(kCr, c.Read(kCr, 4) | (1u << 16), 4);
+  const Picoseconds t0 = c.now();
+  (void)c.Read(0x08000000, 4);  // same bank
+  EXPECT_GT(c.now() - t0, Microseconds(20000));
+  c.Write(kCr, (1u << 1) | (4u << 3), 4);
+  c.Write(kCr, c.Read(kCr, 4) | (1u << 16), 4);
+  const Picoseconds t1 = c.now();
+  (void)c.Read(0x08040000, 4);  // the other bank: read-while-write
+  EXPECT_LT(c.now() - t1, Microseconds(1));
+}
+
+TEST(G474Flash, PowerCutDuringProgramLeavesAMixAndResetsTheChip) {
+  VirtualChip c;
+  std::optional<ResetCause> cause;
+  c.SetResetHandler([&](ResetCause rc) { cause = rc; });
+  Unlock(c);
+  c.flash().CutPowerAfter(0, 42);
+  c.Write(kCr, 1u, 4);
+  c.Write(0x08002000, 0, 4);
+  c.Write(0x08002004, 0, 4);
+  c.AdvanceTo(c.now() + Microseconds(100));
+  ASSERT_TRUE(cause);
+  EXPECT_EQ(*cause, ResetCause::kPowerCut);
+  const std::uint32_t lo = c.Read(0x08002000, 4), hi = c.Read(0x08002004, 4);
+  EXPECT_NE(lo & hi, 0xFFFFFFFFu);           // some bits made it
+  EXPECT_NE(lo | hi, 0u);                    // not all of them
+  EXPECT_TRUE(c.Read(kCr, 4) & (1u << 31));  // locked again after the reset
+}
+
+TEST(G474Flash, ContentsPersistToAFile) {
+  const std::string path =
+      "/tmp/g474_flash_test_" + std::to_string(static_cast<long>(getpid())) + ".bin";
+  std::remove(path.c_str());
+  {
+    ChipConfig cfg;
+    cfg.flash.path = path;
+    VirtualChip c(cfg);
+    Unlock(c);
+    Program(c, 0x0807F000, 0x0123456789ABCDEFull);
+  }
+  ChipConfig cfg;
+  cfg.flash.path = path;
+  VirtualChip c(cfg);
+  EXPECT_EQ(c.Read(0x0807F000, 4), 0x89ABCDEFu);
+  std::remove(path.c_str());
+}
+
+}  // namespace
