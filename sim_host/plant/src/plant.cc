@@ -209,9 +209,9 @@ void Plant::Reset() {
   last_joint_frame_ = 0;
   voltage_V_ = 0.0;
   initial_stored_J_ = 0.0;
-  UpdateTruth();
+  RefreshTruth();
   initial_stored_J_ = truth_.stored.total_J;
-  UpdateTruth();
+  truth_stale_ = true;
   SampleMotorCount();
 }
 
@@ -468,7 +468,7 @@ void Plant::Step(double duty, bool bridge_enabled, double dt_s) {
   }
   Integrate(drive, dt_s);
   voltage_V_ = drive.voltage_V;
-  UpdateTruth();
+  truth_stale_ = true;
   SampleMotorCount();
 }
 
@@ -501,7 +501,7 @@ void Plant::StepPrescribedMotor(double pulley_rad, double dt_s) {
   Integrate(drive, dt_s);
   x_(Index::kMotorAngle) = pulley_rad;  // exact (the integral differs by rounding only)
   voltage_V_ = 0.0;
-  UpdateTruth();
+  truth_stale_ = true;
   SampleMotorCount();
 }
 
@@ -516,7 +516,7 @@ void Plant::SetInterface(const InterfaceParams& interface) {
   step_ = MakeConstants(step_.h);
   if (!was_sls) x_(Index::kMaxwell) = x_(Index::kJointAngle);  // a relaxed new arm
   interface_change_work_J_ += InterfacePotential(x_) - before;
-  UpdateTruth();
+  truth_stale_ = true;
 }
 
 double Plant::InterfaceTorque(const State& x) const {
@@ -532,7 +532,11 @@ double Plant::InterfaceTorque(const State& x) const {
   return torque;
 }
 
-void Plant::UpdateTruth() {
+double Plant::interface_power_W() const {
+  return InterfaceTorque(x_) * x_(Index::kJointVelocity);
+}
+
+void Plant::RefreshTruth() const {
   const MotorParams& m = params_.motor;
   const CableParams& c = params_.cable;
   const State& x = x_;
@@ -602,6 +606,7 @@ void Plant::UpdateTruth() {
 
   t.initial_stored_J = initial_stored_J_;
   t.balance_error_J = t.energy_in_J - (s.total_J - t.initial_stored_J) - d.total_J;
+  truth_stale_ = false;
 }
 
 double Plant::Gaussian() {

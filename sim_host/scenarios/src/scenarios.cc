@@ -134,6 +134,13 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
   // Truth and board power by board tick, from the trial's first tick.
   const std::uint32_t base = app.last().telemetry.tick + 1;
   std::vector<double> truth_energy, truth_power, board_power;
+  // The trial's length (two rests, the cycles) and the flush: no regrowth on the way.
+  const double expected_s =
+      2.0 * sine.rest_ms / 1000.0 + sine.repetitions / sine.frequency.ToDouble() + 0.2;
+  const auto expected_ticks = static_cast<std::size_t>(expected_s * board.tick_hz());
+  truth_energy.reserve(expected_ticks);
+  truth_power.reserve(expected_ticks);
+  board_power.reserve(expected_ticks);
   struct BoardWindow {
     WindowSummary w;
   };
@@ -142,9 +149,10 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
   std::uint32_t flush = 0;
   const std::uint64_t limit = static_cast<std::uint64_t>(board.tick_hz()) * 600;
   for (std::uint64_t i = 0; i < limit; ++i) {
-    const plant::Truth& truth = board.plant().truth();
-    truth_energy.push_back(truth.interface_energy_J);
-    truth_power.push_back(truth.interface_power_W);
+    const plant::Plant& plant = board.plant();
+    const double power_W = plant.interface_power_W();
+    truth_energy.push_back(plant.interface_energy_J());
+    truth_power.push_back(power_W);
     board.Tick();
     const TickResult& r = app.last();
     // The board's power refers to the instant `delay` ticks back.
@@ -156,7 +164,7 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
       out.trace.push_back({static_cast<double>(i) / board.tick_hz(),
                            r.telemetry.setpoint.ToDouble(), r.telemetry.motor.ToDouble(),
                            r.telemetry.joint.ToDouble(), r.telemetry.torque.ToDouble(),
-                           r.telemetry.power.ToDouble(), truth.interface_power_W});
+                           r.telemetry.power.ToDouble(), power_W});
     }
     while (app.PopEvent(&event)) {
       if (event.kind == app::AppEvent::Kind::kWindow) windows.push_back({event.window});

@@ -242,8 +242,16 @@ class Plant {
   void InjectFault(const SensorFault& fault);
   void ClearFaults();
 
-  const Truth& truth() const { return truth_; }
+  // Filled in on the first call after a step (a step does not pay for it).
+  const Truth& truth() const {
+    if (truth_stale_) RefreshTruth();
+    return truth_;
+  }
   double time() const { return time_s_; }
+  // truth().interface_energy_J and .interface_power_W alone, for a caller that records
+  // them every tick.
+  double interface_energy_J() const { return x_(Index::kInterfaceEnergy); }
+  double interface_power_W() const;
   const PlantParams& params() const { return params_; }
   const State& state() const { return x_; }
 
@@ -292,7 +300,7 @@ class Plant {
   void ReturnMagneticEnergy();
   double InterfacePotential(const State& x) const;
   double InterfaceTorque(const State& x) const;
-  void UpdateTruth();
+  void RefreshTruth() const;
   void SampleMotorCount();
   double Gaussian();
 
@@ -321,7 +329,8 @@ class Plant {
   double time_s_ = 0;
   double voltage_V_ = 0;  // applied over the last step
   double initial_stored_J_ = 0;
-  Truth truth_;
+  mutable Truth truth_;
+  mutable bool truth_stale_ = true;
 
   std::mt19937_64 rng_;
   bool has_spare_gaussian_ = false;
