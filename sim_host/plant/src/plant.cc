@@ -81,6 +81,25 @@ inline ContactStep ContactOver(double delta0, double rate, double h, double spri
   return {torque, damper * rate, slope};
 }
 
+// floor(x) as an integer, x clamped to ±4e18 (so |θ| up to ~10^9 rad of counts):
+// without SSE4.1 std::floor is a libm call, and the sensors take one every tick.
+std::int64_t FloorToInt(double x) {
+  const double clamped = std::clamp(x, -4.0e18, 4.0e18);
+  const auto truncated = static_cast<std::int64_t>(clamped);
+  return static_cast<double>(truncated) > clamped ? truncated - 1 : truncated;
+}
+
+// tanh through one exp: glibc's tanh goes through expm1 and costs twice as much, and
+// this one is the rotor's friction law evaluated two or three times a substep. Within a
+// few 1e-16 of tanh in absolute terms, and the force and its dissipation use the same
+// value.
+inline double TanhByExp(double y) {
+  // Beyond 19.1, 2·e^(−2|y|) is below half an ulp of 1: tanh is ±1 exactly.
+  if (std::abs(y) > 19.1) return std::copysign(1.0, y);
+  const double e = std::exp(-2.0 * std::abs(y));
+  return std::copysign((1.0 - e) / (1.0 + e), y);
+}
+
 void CheckStep(double dt_s) {
   if (!(dt_s > 0.0 && dt_s <= kMaxCallStep_s)) {
     throw std::invalid_argument("Plant: dt_s = " + std::to_string(dt_s) +
@@ -314,7 +333,7 @@ bool Plant::Substep(const Drive& drive, const SubstepConstants& k, const State& 
     if (motor_free) {
       double coulomb_slope = 0;
       if (coulomb_reflected_ > 0.0) {
-        const double t = std::tanh(coulomb_gain_ * wm);
+        const double t = TanhByExp(coulomb_gain_ * wm);
         coulomb = coulomb_reflected_ * t;
         coulomb_slope = coulomb_reflected_ * coulomb_gain_ * (1.0 - t * t);
       }
@@ -624,11 +643,9 @@ void Plant::SampleMotorCount() {
   if (params_.sensors.motor_noise_counts > 0.0) {
     counts += params_.sensors.motor_noise_counts * Gaussian();
   }
-  // floor: a quadrature counter has counted every edge the shaft has passed. The
-  // int64 cast is safe for |θ_m| < 10^9 rad; a wider angle saturates the floor.
-  const double floored = std::clamp(std::floor(counts), -4.0e18, 4.0e18);
-  const std::int64_t count =
-      static_cast<std::int64_t>(floored) + params_.sensors.motor_count_at_zero;
+  // floor: a quadrature counter has counted every edge the shaft has passed. Exact for
+  // |θ_m| < 10^9 rad; a wider angle saturates the floor.
+  const std::int64_t count = FloorToInt(counts) + params_.sensors.motor_count_at_zero;
   const auto raw =
       static_cast<std::uint16_t>(static_cast<std::uint64_t>(count) & 0xFFFFu);
   FaultSlot& stuck = faults_[static_cast<int>(SensorFaultKind::kMotorStuck)];
@@ -640,9 +657,7 @@ std::uint16_t Plant::JointFrame() {
   if (params_.sensors.joint_noise_counts > 0.0) {
     counts += params_.sensors.joint_noise_counts * Gaussian();
   }
-  const double rounded = std::clamp(std::floor(counts + 0.5), -4.0e18, 4.0e18);
-  std::int64_t count =
-      static_cast<std::int64_t>(rounded) + params_.sensors.joint_zero_count;
+  std::int64_t count = FloorToInt(counts + 0.5) + params_.sensors.joint_zero_count;
   FaultSlot& jump = faults_[static_cast<int>(SensorFaultKind::kJointJump)];
   const std::int32_t jump_counts = jump.jump_counts;
   if (ConsumeFault(&jump)) count += jump_counts;
@@ -677,10 +692,9 @@ void Plant::InjectFault(const SensorFault& fault) {
     if (has_last_joint_frame_) {
       stuck_joint_frame_ = last_joint_frame_;
     } else {
-      const double rounded =
-          std::floor(x_(Index::kJointAngle) * kJointCountsPerRad + 0.5);
       const std::int64_t count =
-          static_cast<std::int64_t>(rounded) + params_.sensors.joint_zero_count;
+          FloorToInt(x_(Index::kJointAngle) * kJointCountsPerRad + 0.5) +
+          params_.sensors.joint_zero_count;
       stuck_joint_frame_ =
           EncodeJointFrame(static_cast<std::uint16_t>(static_cast<std::uint64_t>(count) &
                                                       kJointFrameCountMask),
