@@ -30,6 +30,7 @@ struct Options {
   // with 10 µs substeps within 0.2 % (tests/sim, step independence). The plant refuses
   // a step too long for a mode the sensors follow.
   double max_step_us = 100.0;
+  int threads = 0;  // 0: one per core
 };
 
 plant::PlantParams Load(const std::string& name_or_path) {
@@ -75,6 +76,12 @@ int main(int argc, char** argv) {
                  "Longest substep of the plant, µs (the parameter files use 100)")
       ->check(CLI::Range(0.1, 1000.0))
       ->capture_default_str();
+  cli.add_option(
+         "--threads", opt.threads,
+         "Threads for the trials (0: one per core, 1: serial); the results do not "
+         "depend on it")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
   CLI11_PARSE(cli, argc, argv);
 
   paper::Report report(opt.out, opt.quiet);
@@ -93,7 +100,8 @@ int main(int argc, char** argv) {
     if (opt.velocity_window != 0) {
       config.velocity_window = static_cast<std::uint16_t>(opt.velocity_window);
     }
-    return paper::Run(opt.scenario, robot, subjects, config, opt.seed, report);
+    return paper::Run(opt.scenario, robot, subjects, config, opt.seed, opt.threads,
+                      report);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mjc-paper: %s\n", e.what());
     return 1;

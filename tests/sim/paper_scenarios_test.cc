@@ -138,6 +138,57 @@ TEST(SimTrial, ResultsDoNotDependOnThePlantSubstep) {
     EXPECT_NEAR(loads[1][k], loads[0][k], 0.002 * loads[0][k]);
 }
 
+// Every number a trial outcome holds, in order: two outcomes are the same iff these are.
+std::vector<double> Flatten(const TrialOutcome& t) {
+  std::vector<double> v = {t.power_rmse_W, t.truth_peak_power_W,
+                           static_cast<double>(t.ticks), t.faulted ? 1.0 : 0.0};
+  for (const WindowOutcome& w : t.windows) {
+    v.insert(v.end(), {static_cast<double>(w.motion), static_cast<double>(w.repetition),
+                       w.load, w.unload, w.net, w.eta, w.truth_load, w.truth_unload,
+                       w.truth_net, w.truth_eta, w.peak_fraction});
+    v.insert(v.end(), w.profile.begin(), w.profile.end());
+    v.insert(v.end(), w.truth_profile.begin(), w.truth_profile.end());
+  }
+  for (const TraceRow& r : t.trace) {
+    v.insert(v.end(),
+             {r.t, r.setpoint, r.motor, r.joint, r.torque, r.power, r.truth_power});
+  }
+  return v;
+}
+
+TEST(SimTrial, IndependentTrialsAreTheSameOnAnyNumberOfThreads) {
+  Bench bench(Robot());
+  ASSERT_TRUE(bench.calibration.uploaded);
+  const plant::PlantParams s1 = plant::LoadPlantParams("subject1");
+  const plant::PlantParams s2 = plant::LoadPlantParams("subject2");
+  const std::vector<TrialSpec> specs = {
+      {s1.interface, 25, true, 11, "s1 25°"},
+      {s2.interface, 11, false, 12, "s2 11°"},
+      {plant::Redon(s1, 3).interface, 25, false, 13, "s1 re-donned"},
+      {s1.interface, 25, false, 14, "s1 25°, other noise"},
+      {s2.interface, 6, false, 15, "s2 6°"},
+  };
+  int calls = 0;
+  const auto serial =
+      RunTrials(Robot(), DefaultBoardConfig(), bench.calibration.record, specs, 1,
+                [&calls](const std::string&, double) { ++calls; });
+  EXPECT_EQ(calls, 5);
+  const auto parallel = RunTrials(Robot(), DefaultBoardConfig(), bench.calibration.record,
+                                  specs, 4, nullptr);
+  ASSERT_EQ(serial.size(), specs.size());
+  ASSERT_EQ(parallel.size(), specs.size());
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    SCOPED_TRACE(specs[i].label);
+    ASSERT_FALSE(serial[i].faulted) << serial[i].fault;
+    EXPECT_EQ(AnalysedFlexions(serial[i], 5).size(), 3u);
+    EXPECT_EQ(Flatten(parallel[i]), Flatten(serial[i]));  // bit for bit
+  }
+  EXPECT_FALSE(serial[0].trace.empty());
+  // The runs are not copies of one another: another noise seed is another outcome.
+  EXPECT_NE(Flatten(serial[3]), Flatten(serial[0]));
+  EXPECT_EQ(serial[3].ticks, serial[0].ticks);
+}
+
 // A sensor fault injected in the plant mid-trial disables the bridge in the tick whose
 // sample carries it, and the board reports it.
 void ExpectSameTickStop(plant::SensorFaultKind kind, Fault expected,
