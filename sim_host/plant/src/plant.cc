@@ -81,8 +81,9 @@ inline ContactStep ContactOver(double delta0, double rate, double h, double spri
   return {torque, damper * rate, slope};
 }
 
-// floor(x) as an integer, x clamped to ±4e18 (so |θ| up to ~10^9 rad of counts):
-// without SSE4.1 std::floor is a libm call, and the sensors take one every tick.
+// floor(x) as an integer, x clamped to ±4e18 counts (an angle beyond ~10^9 rad
+// saturates): without SSE4.1 std::floor is a libm call, and the sensors take one every
+// tick.
 std::int64_t FloorToInt(double x) {
   const double clamped = std::clamp(x, -4.0e18, 4.0e18);
   const auto truncated = static_cast<std::int64_t>(clamped);
