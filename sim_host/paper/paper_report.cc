@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
+#include <random>
 #include <stdexcept>
 
 #include "mjc/host/report.h"
@@ -29,6 +31,18 @@ std::string PlusMinus(const host::Stats& s, double scale, const char* fmt, bool 
 
 nlohmann::json StatsJson(const host::Stats& s) {
   return {{"n", s.n}, {"mean", s.mean}, {"std", s.std}, {"se", s.se}};
+}
+
+// The sensor-noise seed of the run at `index` in the list: every run has a board of
+// its own and needs a noise sequence of its own. std::seed_seq's mixing is specified
+// by the standard, so the same on every library.
+std::uint64_t RunSeed(std::uint64_t seed, std::size_t index) {
+  std::seed_seq mix{static_cast<std::uint32_t>(seed),
+                    static_cast<std::uint32_t>(seed >> 32),
+                    static_cast<std::uint32_t>(index)};
+  std::uint32_t words[2];
+  mix.generate(std::begin(words), std::end(words));
+  return (std::uint64_t{words[0]} << 32) | words[1];
 }
 
 // Relative error of a board window energy against truth, in % of |truth load|.
@@ -352,7 +366,7 @@ int Report::Finish(double wall_s, double simulated_s) {
 
 int Run(const std::string& scenario, const plant::PlantParams& robot,
         const std::vector<plant::PlantParams>& subjects, const ControlConfig& config,
-        std::uint64_t seed, Report& report) {
+        std::uint64_t seed, int threads, Report& report) {
   const auto start = std::chrono::steady_clock::now();
   sim::SimBoard board(robot, config);
   if (board.app().control().config().velocity_window != config.velocity_window) {
@@ -373,38 +387,67 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
     return 2;
   }
   const bool all = scenario == "all";
+  const bool repeatability = all || scenario == "repeatability";
+  const bool amplitude_sweep = all || scenario == "amplitude";
   const double amplitude = 25.0;
+  const std::vector<double> amplitudes = {6, 8, 11, 15, 20, 25};
   if (subjects.empty() && scenario != "calibration") {
     throw std::runtime_error("no subject parameter sets given");
   }
-  if (all || scenario == "repeatability") {
-    board.plant().SetInterface(subjects.front().interface);
-    const sim::TrialOutcome one = sim::RunTrial(board, sim::PaperSine(amplitude), true);
-    report.Trial(one, amplitude);
-    const sim::RepeatabilityOutcome rep = sim::RunRepeatability(
-        board, subjects.front(), amplitude, seed,
-        [&report](const std::string& s, double f) { report.Progress(s, f); }, 0.1,
-        all ? 0.3 : 1.0);
-    report.Repeatability(rep, amplitude);
+
+  // Every trial on a board of its own, calibrated with the record the sweep uploaded
+  // (as a board powered up with its stored calibration), so they can run on any
+  // thread: Fig. 8's trial, the five re-donned trials, then subject by subject the
+  // amplitudes.
+  std::vector<sim::TrialSpec> specs;
+  if (repeatability) {
+    const plant::PlantParams& first = subjects.front();
+    specs.push_back({first.interface, amplitude, true, 0, "one trial: " + first.name});
+    for (std::uint64_t k = 0; k < 5; ++k) {
+      specs.push_back({plant::Redon(first, seed + k).interface, amplitude, false, 0,
+                       "repeatability: trial " + std::to_string(k + 1) + "/5"});
+    }
   }
-  if (all || scenario == "amplitude") {
-    const std::vector<double> amplitudes = {6, 8, 11, 15, 20, 25};
+  const std::size_t sweep_from = specs.size();
+  if (amplitude_sweep) {
+    for (const plant::PlantParams& subject : subjects) {
+      for (const double a : amplitudes) {
+        specs.push_back({subject.interface, a, false, 0,
+                         "amplitude sweep: " + subject.name + " " +
+                             std::to_string(static_cast<int>(a)) + "°"});
+      }
+    }
+  }
+  for (std::size_t i = 0; i < specs.size(); ++i) specs[i].noise_seed = RunSeed(seed, i);
+  const std::vector<sim::TrialOutcome> trials = sim::RunTrials(
+      robot, config, cal.record, specs, threads,
+      [&report](const std::string& s, double f) { report.Progress(s, 0.1 + 0.9 * f); });
+
+  // Reported in the order of the list, whatever the order the trials ended in.
+  double simulated_s = board.plant().time();
+  for (const sim::TrialOutcome& t : trials) {
+    simulated_s += (t.ticks + 1.0) / board.tick_hz();  // the calibration's tick too
+  }
+  if (repeatability) {
+    report.Trial(trials[0], amplitude);
+    report.Repeatability(
+        sim::SummariseRepeatability({trials.begin() + 1, trials.begin() + 6}), amplitude);
+  }
+  if (amplitude_sweep) {
     std::vector<sim::SubjectSweep> sweeps;
-    const double from = all ? 0.3 : 0.1;
-    for (std::size_t i = 0; i < subjects.size(); ++i) {
-      const auto n = static_cast<double>(subjects.size());
-      const double a = from + (1.0 - from) * static_cast<double>(i) / n;
-      const double b = from + (1.0 - from) * static_cast<double>(i + 1) / n;
-      sweeps.push_back(sim::RunAmplitudeSweep(
-          board, subjects[i], amplitudes,
-          [&report](const std::string& s, double f) { report.Progress(s, f); }, a, b));
+    std::size_t next = sweep_from;
+    for (const plant::PlantParams& subject : subjects) {
+      std::vector<sim::AmplitudePoint> points;
+      for (const double a : amplitudes)
+        points.push_back(sim::SummarisePoint(a, trials[next++]));
+      sweeps.push_back(sim::SummariseSweep(subject.name, std::move(points)));
     }
     report.Amplitude(sweeps);
   }
   report.Progress("done", 1.0);
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return report.Finish(wall, board.plant().truth().time_s) == 0 ? 0 : 3;
+  return report.Finish(wall, simulated_s) == 0 ? 0 : 3;
 }
 
 }  // namespace mjc::paper

@@ -1,5 +1,6 @@
-// Orchestration and output of mjc-paper: runs the scenarios in order on one simulated
-// board and turns their outcomes into printed tables, CSV, JSON and gnuplot figures.
+// Orchestration and output of mjc-paper: calibrates a simulated board, runs the
+// scenarios' trials (on threads, each on a board of its own) and turns their outcomes
+// into printed tables, CSV, JSON and gnuplot figures.
 #pragma once
 
 #include <cstdint>
@@ -40,9 +41,11 @@ class Report {
 };
 
 // Runs `scenario` ("all", "calibration", "repeatability", "amplitude"); the board is
-// always calibrated first (it refuses trials until then). Returns the exit status.
+// always calibrated first (it refuses trials until then). The trials then run on
+// `threads` threads (0: one per core, 1: serial), each on a board of its own, and the
+// results are the same bit for bit whatever the number. Returns the exit status.
 int Run(const std::string& scenario, const plant::PlantParams& robot,
         const std::vector<plant::PlantParams>& subjects, const ControlConfig& config,
-        std::uint64_t seed, Report& report);
+        std::uint64_t seed, int threads, Report& report);
 
 }  // namespace mjc::paper

@@ -26,7 +26,7 @@ int main() {
   using namespace mjc::sim;
   constexpr double kDeg = 3.14159265358979323846 / 180.0;
   plant::PlantParams robot = plant::LoadPlantParams("default");
-  robot.integration.max_step_s = 33.4e-6;  // mjc-paper's substep
+  robot.integration.max_step_s = 100e-6;  // mjc-paper's substep: one a tick
 
   const auto start = std::chrono::steady_clock::now();
   SimBoard board(robot, DefaultBoardConfig());

@@ -105,7 +105,6 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
   auto host_link = bus->Connect();
 
   plant::PlantParams params = plant::LoadPlantParams("default");
-  params.integration.max_step_s = 33.4e-6;
   params.interface = plant::LoadPlantParams("subject1").interface;
   sim::SimBoard board(params, sim::DefaultBoardConfig());
   Calibration cal;

@@ -33,6 +33,74 @@ ContactForce Contact(double delta, double delta_dot, const CableParams& c) {
   return {torque, (torque - spring) * delta_dot};
 }
 
+// A contact over a substep whose penetration goes from delta0 at a rate `rate` (so
+// delta0 + h·rate at the end). The spring's torque is the discrete gradient of its
+// energy ½k_c·max(0, δ)² between the ends, so its work over the substep is exactly the
+// change of that energy, touch-down and lift-off included; the damper acts at the
+// midpoint, ramped in and clamped as in Contact().
+struct ContactStep {
+  double torque = 0;  // ≥ 0
+  double loss_W = 0;  // ≥ 0, the damper (and the clamp) at the midpoint
+  double slope = 0;   // d torque / d rate, N·m·s/rad (Newton's Jacobian)
+};
+
+inline ContactStep ContactOver(double delta0, double rate, double h, double spring_slope,
+                               const CableParams& c) {
+  const double delta1 = delta0 + h * rate;
+  if (delta0 <= 0.0 && delta1 <= 0.0) return {};
+  const double damping = c.contact_damping_Nm_s_per_rad;
+  const double ramp_rad = c.contact_damping_ramp_rad;
+  const double mid = 0.5 * (delta0 + delta1);
+  double spring = c.contact_stiffness_Nm_per_rad * mid;
+  double damper = damping * rate;
+  double slope = spring_slope + damping;
+  if (delta0 < ramp_rad || delta1 < ramp_rad) {  // not pressed in over the whole substep
+    const double k = c.contact_stiffness_Nm_per_rad;
+    if (delta0 < 0.0) {  // touches down inside the substep
+      const double span = delta1 - delta0;
+      spring = 0.5 * k * delta1 * delta1 / span;
+      slope = spring_slope * delta1 * (delta1 - 2.0 * delta0) / (span * span);
+    } else if (delta1 < 0.0) {  // lifts off inside the substep
+      const double span = delta0 - delta1;
+      spring = 0.5 * k * delta0 * delta0 / span;
+      slope = spring_slope * delta0 * delta0 / (span * span);
+    } else {
+      slope = spring_slope;
+    }
+    if (mid >= ramp_rad) {
+      slope += damping;
+    } else if (mid > 0.0) {
+      damper = damping * (mid / ramp_rad) * rate;
+      slope += damping * (mid + 0.5 * h * rate) / ramp_rad;
+    } else {
+      damper = 0.0;
+    }
+  }
+  const double torque = spring + damper;
+  if (torque <= 0.0) return {0.0, -spring * rate, 0.0};
+  return {torque, damper * rate, slope};
+}
+
+// floor(x) as an integer, x clamped to ±4e18 counts (an angle beyond ~10^9 rad
+// saturates): without SSE4.1 std::floor is a libm call, and the sensors take one every
+// tick.
+std::int64_t FloorToInt(double x) {
+  const double clamped = std::clamp(x, -4.0e18, 4.0e18);
+  const auto truncated = static_cast<std::int64_t>(clamped);
+  return static_cast<double>(truncated) > clamped ? truncated - 1 : truncated;
+}
+
+// tanh through one exp: glibc's tanh goes through expm1 and costs twice as much, and
+// this one is the rotor's friction law evaluated two or three times a substep. Within a
+// few 1e-16 of tanh in absolute terms, and the force and its dissipation use the same
+// value.
+inline double TanhByExp(double y) {
+  // Beyond 19.1, 2·e^(−2|y|) is below half an ulp of 1: tanh is ±1 exactly.
+  if (std::abs(y) > 19.1) return std::copysign(1.0, y);
+  const double e = std::exp(-2.0 * std::abs(y));
+  return std::copysign((1.0 - e) / (1.0 + e), y);
+}
+
 void CheckStep(double dt_s) {
   if (!(dt_s > 0.0 && dt_s <= kMaxCallStep_s)) {
     throw std::invalid_argument("Plant: dt_s = " + std::to_string(dt_s) +
@@ -57,19 +125,6 @@ double StandardNormal(std::mt19937_64* rng, bool* has_spare, double* spare) {
   return r * std::cos(kTwoPi * u2);
 }
 
-struct Plant::Forces {
-  double tau_r = 0;           // pulley pushing the cable side positive, N·m
-  double tau_l = 0;           // pulley pushing it negative, N·m
-  double contact_loss = 0;    // W
-  double friction = 0;        // sheath friction on the cable side, N·m
-  double friction_loss = 0;   // W
-  double bristle_rate = 0;    // dz/dt, rad/s
-  double tau_sea = 0;         // N·m
-  double tau_if = 0;          // N·m
-  double interface_loss = 0;  // W
-  double maxwell_rate = 0;    // dx/dt, rad/s
-};
-
 Plant::Plant(const PlantParams& params) : params_(params) {
   ValidatePlantParams(params_, "<in-memory>");
   Derive();
@@ -85,8 +140,51 @@ void Plant::Derive() {
   coulomb_reflected_ = m.coulomb_Nm * n_;
   coulomb_gain_ = n_ / m.coulomb_speed_rad_s;
   k_sea_ = params_.sea.Stiffness();
+  bristle_relax_ =
+      params_.cable.coulomb_Nm > 0.0
+          ? params_.cable.bristle_stiffness_Nm_per_rad / params_.cable.coulomb_Nm
+          : 0.0;
   motor_counts_per_rad_ =
       static_cast<double>(params_.sensors.motor_counts_per_rev) * n_ / kTwoPi;
+  step_ = MakeConstants(params_.integration.max_step_s);
+}
+
+Plant::SubstepConstants Plant::MakeConstants(double h) const {
+  const MotorParams& m = params_.motor;
+  const InterfaceParams& ip = params_.interface;
+  SubstepConstants k;
+  k.h = h;
+  k.half_h = 0.5 * h;
+  k.rotor_mass = 2.0 * j_eff_ / h;
+  k.cable_mass = 2.0 * params_.cable.inertia_kg_m2 / h;
+  k.joint_mass = 2.0 * params_.joint.inertia_kg_m2 / h;
+  const double tau_s = m.inductance_H / m.resistance_ohm;
+  k.current_decay = std::exp(-h / tau_s);
+  k.charge_weight = -tau_s * std::expm1(-h / tau_s);
+  k.square_weight = -0.5 * tau_s * std::expm1(-2.0 * h / tau_s);
+  k.charge_per_V = (h - k.charge_weight) / m.resistance_ohm;
+  k.back_emf_slope = k_t_ * n_ * k_t_ * n_ * k.charge_per_V / h;
+  k.torque_per_charge = k_t_ * n_ / h;
+  k.contact_slope = params_.cable.contact_stiffness_Nm_per_rad * k.half_h;
+  k.sea_slope = k_sea_ * k.half_h;
+  if (ip.present && ip.model == InterfaceModel::kKelvinVoigt) {
+    k.interface_slope = ip.stiffness_Nm_per_rad * k.half_h + ip.damping_Nm_s_per_rad;
+  } else if (ip.present) {
+    if (ip.damping_Nm_s_per_rad > 0.0) {
+      k.maxwell_beta =
+          k.half_h * ip.maxwell_stiffness_Nm_per_rad / ip.damping_Nm_s_per_rad;
+    }
+    k.interface_slope =
+        k.half_h * (ip.stiffness_Nm_per_rad +
+                    ip.maxwell_stiffness_Nm_per_rad / (1.0 + k.maxwell_beta));
+  }
+  k.joint_diagonal =
+      k.joint_mass + k.sea_slope + k.interface_slope + params_.joint.viscous_Nm_s_per_rad;
+  k.joint_compliance = 1.0 / k.joint_diagonal;
+  k.joint_gain = k.sea_slope * k.joint_compliance;
+  k.cable_diagonal = k.cable_mass + params_.cable.viscous_Nm_s_per_rad +
+                     k.sea_slope * (1.0 - k.joint_gain);
+  return k;
 }
 
 double Plant::InterfacePotential(const State& x) const {
@@ -129,123 +227,243 @@ void Plant::Reset() {
   for (FaultSlot& slot : faults_) slot = FaultSlot{};
   has_last_joint_frame_ = false;
   last_joint_frame_ = 0;
-  truth_ = Truth{};
-  UpdateTruth(0.0);
-  truth_.initial_stored_J = truth_.stored.total_J;
-  truth_.balance_error_J = 0.0;
+  voltage_V_ = 0.0;
+  initial_stored_J_ = 0.0;
+  RefreshTruth();
+  initial_stored_J_ = truth_.stored.total_J;
+  truth_stale_ = true;
   SampleMotorCount();
 }
 
-Plant::Forces Plant::ComputeForces(const State& x) const {
-  const CableParams& c = params_.cable;
-  const InterfaceParams& ip = params_.interface;
-  Forces f;
-  const double pulley = c.alpha * x(Index::kMotorAngle);
-  const double pulley_rate = c.alpha * x(Index::kMotorVelocity);
-  const double cable = x(Index::kCableAngle);
-  const double cable_rate = x(Index::kCableVelocity);
-
-  const ContactForce right =
-      Contact(pulley - c.alpha * c.c_right_rad - cable, pulley_rate - cable_rate, c);
-  const ContactForce left =
-      Contact(cable - (pulley - c.alpha * c.c_left_rad), cable_rate - pulley_rate, c);
-  f.tau_r = right.torque;
-  f.tau_l = left.torque;
-  f.contact_loss = right.loss_rate + left.loss_rate;
-
-  const double z = x(Index::kBristle);
-  const double speed = std::abs(cable_rate);
-  f.friction = c.viscous_Nm_s_per_rad * cable_rate;
-  f.friction_loss = c.viscous_Nm_s_per_rad * cable_rate * cable_rate;
-  if (c.coulomb_Nm > 0.0) {
-    const double sigma = c.bristle_stiffness_Nm_per_rad;
-    f.friction += sigma * z;
-    f.bristle_rate = cable_rate - sigma * speed * z / c.coulomb_Nm;
-    f.friction_loss += sigma * sigma * z * z * speed / c.coulomb_Nm;
-  }
-
-  const double joint = x(Index::kJointAngle);
-  const double joint_rate = x(Index::kJointVelocity);
-  f.tau_sea = k_sea_ * (cable - joint);
-  if (ip.present) {
-    f.tau_if = ip.stiffness_Nm_per_rad * joint + ip.preload_Nm;
-    if (ip.model == InterfaceModel::kKelvinVoigt) {
-      f.tau_if += ip.damping_Nm_s_per_rad * joint_rate;
-      f.interface_loss = ip.damping_Nm_s_per_rad * joint_rate * joint_rate;
-    } else {
-      const double arm = ip.maxwell_stiffness_Nm_per_rad * (joint - x(Index::kMaxwell));
-      f.tau_if += arm;
-      if (ip.damping_Nm_s_per_rad > 0.0) {
-        f.maxwell_rate = arm / ip.damping_Nm_s_per_rad;
-        f.interface_loss = arm * f.maxwell_rate;
-      }
-    }
-  }
-  return f;
-}
-
-void Plant::Derivative(const State& x, const Drive& drive, State* dx) const {
+bool Plant::Substep(const Drive& drive, const SubstepConstants& k, const State& in,
+                    State* out) const {
   const MotorParams& m = params_.motor;
   const CableParams& c = params_.cable;
-  const JointParams& j = params_.joint;
-  const Forces f = ComputeForces(x);
-  State& d = *dx;
-  d.setZero();
+  const InterfaceParams& ip = params_.interface;
+  const double h = k.h;
+  const double half_h = k.half_h;
+  const double alpha = c.alpha;
+  const double i0 = in(Index::kCurrent);
+  const double motor0 = in(Index::kMotorAngle);
+  const double motor_rate0 = in(Index::kMotorVelocity);
+  const double cable0 = in(Index::kCableAngle);
+  const double cable_rate0 = in(Index::kCableVelocity);
+  const double z0 = in(Index::kBristle);
+  const double joint0 = in(Index::kJointAngle);
+  const double joint_rate0 = in(Index::kJointVelocity);
+  const double maxwell0 = in(Index::kMaxwell);
+  const double delta_r0 = alpha * (motor0 - c.c_right_rad) - cable0;
+  const double delta_l0 = cable0 - alpha * (motor0 - c.c_left_rad);
+  const double stretch0 = cable0 - joint0;
 
-  const double omega_m = x(Index::kMotorVelocity);
-  const double pulley_torque = c.alpha * (f.tau_r - f.tau_l);  // on the cable, at θ_m
-  if (drive.prescribed) {
-    d(Index::kMotorAngle) = drive.pulley_velocity;
-    d(Index::kPrescribedWork) = pulley_torque * omega_m;
-  } else {
-    const double i = x(Index::kCurrent);
-    if (drive.bridge_enabled) {
-      d(Index::kCurrent) =
-          (drive.voltage_V - m.resistance_ohm * i - k_t_ * n_ * omega_m) / m.inductance_H;
+  // The joint's equation is linear in the midpoint speeds (springs, interface and
+  // bearing): ω̄_j = joint_gain·ω̄_c − joint_rest/joint_diagonal. It is eliminated,
+  // and Newton runs on the rotor and the cable side, which the contacts couple.
+  double interface0 = 0.0;  // τ_if at ω̄_j = 0
+  const bool kelvin_voigt = ip.present && ip.model == InterfaceModel::kKelvinVoigt;
+  const bool sls = ip.present && !kelvin_voigt;
+  if (kelvin_voigt) {
+    interface0 = ip.stiffness_Nm_per_rad * joint0 + ip.preload_Nm;
+  } else if (sls) {
+    interface0 =
+        ip.stiffness_Nm_per_rad * joint0 + ip.preload_Nm +
+        ip.maxwell_stiffness_Nm_per_rad * (joint0 - maxwell0) / (1.0 + k.maxwell_beta);
+  }
+  const double joint_rest = -k.joint_mass * joint_rate0 - k_sea_ * stretch0 + interface0;
+  // The cable side's equation without contacts and bristle: cable_diagonal·ω̄_c +
+  // cable_rest.
+  const double cable_rest =
+      -k.cable_mass * cable_rate0 + k_sea_ * stretch0 + k.joint_gain * joint_rest;
+
+  // The rotor's equation without friction and contacts: rotor_diagonal·ω̄_m +
+  // rotor_rest. The winding's charge over the substep is affine in ω̄_m.
+  const bool motor_free = !drive.prescribed;
+  const bool driven = motor_free && drive.bridge_enabled;
+  const double ke = k_t_ * n_;
+  double charge_fixed = 0;
+  double rotor_diagonal = k.rotor_mass + b_m_reflected_;
+  if (driven) {
+    charge_fixed = k.charge_weight * i0 + k.charge_per_V * drive.voltage_V;
+    rotor_diagonal += k.back_emf_slope;
+  }
+  const double rotor_rest =
+      -k.rotor_mass * motor_rate0 - k.torque_per_charge * charge_fixed;
+
+  const bool bristle = c.coulomb_Nm > 0.0;
+  const double sigma = c.bristle_stiffness_Nm_per_rad;
+  const double relax = bristle_relax_;
+  const double half_relax = half_h * relax;
+  const double half_sigma = half_h * sigma;
+
+  // Newton from the speeds at the start.
+  double wm = drive.prescribed ? drive.pulley_velocity : motor_rate0;
+  double wc = cable_rate0;
+  ContactStep right, left;
+  double z = z0, coulomb = 0;
+  constexpr int kMaxIterations = 12;
+  // Relative to each equation's terms: rounding leaves ~1e-16, and what is left above
+  // it is energy the ledgers do not see (h·residual·speed a substep). The floor is for
+  // equations whose terms all vanish (at rest).
+  constexpr double kTolerance = 1e-12;
+  constexpr double kFloor_Nm = 1e-15;
+  for (int iteration = 0;; ++iteration) {
+    const double rate = alpha * wm - wc;  // the right contact closing
+    right = ContactOver(delta_r0, rate, h, k.contact_slope, c);
+    left = ContactOver(delta_l0, -rate, h, k.contact_slope, c);
+    const double contact = right.torque - left.torque;
+    const double contact_slope = right.slope + left.slope;
+
+    double bristle_torque = 0, bristle_slope = 0;
+    if (bristle) {
+      const double inv_den = 1.0 / (1.0 + half_relax * std::abs(wc));
+      z = (z0 + half_h * wc) * inv_den;
+      bristle_torque = sigma * z;
+      const double z_along = wc < 0.0 ? -z : z;
+      // Never below zero: a bristle carried past F_c/σ0 by a very fast substep would
+      // otherwise give a falling slope.
+      bristle_slope = std::max(0.0, half_sigma * (1.0 - relax * z_along) * inv_den);
     }
-    const double friction = coulomb_reflected_ * std::tanh(coulomb_gain_ * omega_m) +
-                            b_m_reflected_ * omega_m;
-    d(Index::kMotorAngle) = omega_m;
-    d(Index::kMotorVelocity) = (n_ * k_t_ * i - friction - pulley_torque) / j_eff_;
-    d(Index::kElectricalEnergy) = drive.voltage_V * i;
-    d(Index::kResistiveLoss) = m.resistance_ohm * i * i;
-    d(Index::kMotorFrictionLoss) = friction * omega_m;
+    const double cable_linear = k.cable_diagonal * wc;
+    const double r_cable = cable_linear + cable_rest - contact + bristle_torque;
+    const double cable_tolerance =
+        kTolerance * (std::abs(cable_linear) + std::abs(cable_rest) + std::abs(contact) +
+                      std::abs(bristle_torque)) +
+        kFloor_Nm;
+    const double j_cable = k.cable_diagonal + contact_slope + bristle_slope;
+
+    if (motor_free) {
+      double coulomb_slope = 0;
+      if (coulomb_reflected_ > 0.0) {
+        const double t = TanhByExp(coulomb_gain_ * wm);
+        coulomb = coulomb_reflected_ * t;
+        coulomb_slope = coulomb_reflected_ * coulomb_gain_ * (1.0 - t * t);
+      }
+      const double rotor_linear = rotor_diagonal * wm;
+      const double r_rotor = rotor_linear + rotor_rest + coulomb + alpha * contact;
+      if (std::abs(r_rotor) <=
+              kTolerance * (std::abs(rotor_linear) + std::abs(rotor_rest) +
+                            std::abs(coulomb) + std::abs(alpha * contact)) +
+                  kFloor_Nm &&
+          std::abs(r_cable) <= cable_tolerance) {
+        break;
+      }
+      if (iteration == kMaxIterations) return false;
+      // The 2×2 symmetric Jacobian [a b; b d].
+      const double a = rotor_diagonal + coulomb_slope + alpha * alpha * contact_slope;
+      const double b = -alpha * contact_slope;
+      const double inv_det = 1.0 / (a * j_cable - b * b);
+      wm -= (j_cable * r_rotor - b * r_cable) * inv_det;
+      wc -= (a * r_cable - b * r_rotor) * inv_det;
+    } else {
+      if (std::abs(r_cable) <= cable_tolerance) break;
+      if (iteration == kMaxIterations) return false;
+      wc -= r_cable / j_cable;
+    }
   }
 
-  const double cable_rate = x(Index::kCableVelocity);
-  d(Index::kCableAngle) = cable_rate;
-  d(Index::kCableVelocity) =
-      (f.tau_r - f.tau_l - f.friction - f.tau_sea) / c.inertia_kg_m2;
-  d(Index::kBristle) = f.bristle_rate;
+  // The end of the substep, and every ledger from the same midpoint forces.
+  const double wj = k.joint_gain * wc - joint_rest * k.joint_compliance;
+  const double joint_mid = joint0 + half_h * wj;
+  const double interface = interface0 + k.interface_slope * wj;
+  double maxwell_mid = maxwell0, interface_loss_J = 0;
+  if (kelvin_voigt) {
+    interface_loss_J = h * ip.damping_Nm_s_per_rad * wj * wj;
+  } else if (sls) {
+    maxwell_mid = (maxwell0 + k.maxwell_beta * joint_mid) / (1.0 + k.maxwell_beta);
+    // The arm's force times the dashpot's travel.
+    interface_loss_J = ip.maxwell_stiffness_Nm_per_rad * (joint_mid - maxwell_mid) * 2.0 *
+                       (maxwell_mid - maxwell0);
+  }
+  double current = 0, electrical_J = 0, resistive_J = 0, motor_friction_J = 0,
+         prescribed_J = 0, motor_rate = wm;
+  if (motor_free) {
+    if (driven) {
+      const double steady = (drive.voltage_V - ke * wm) / m.resistance_ohm;
+      const double excess = i0 - steady;
+      current = steady + excess * k.current_decay;
+      electrical_J = drive.voltage_V * (charge_fixed - k.charge_per_V * ke * wm);
+      resistive_J = m.resistance_ohm *
+                    (steady * steady * h + 2.0 * steady * excess * k.charge_weight +
+                     excess * excess * k.square_weight);
+    }
+    motor_rate = 2.0 * wm - motor_rate0;
+    motor_friction_J = h * (coulomb + b_m_reflected_ * wm) * wm;
+  } else {
+    // The pulley's torque on the cable times its speed.
+    prescribed_J = h * alpha * (right.torque - left.torque) * wm;
+  }
+  const double contact_J = h * (right.loss_W + left.loss_W);
+  const double friction_J =
+      h * (c.viscous_Nm_s_per_rad * wc * wc + sigma * relax * std::abs(wc) * z * z);
+  const double joint_viscous_J = h * params_.joint.viscous_Nm_s_per_rad * wj * wj;
+  const double interface_J = h * interface * wj;
+  if (!std::isfinite(wm + wc + wj + z + maxwell_mid + current + electrical_J +
+                     resistive_J + motor_friction_J + prescribed_J + contact_J +
+                     friction_J + interface_loss_J + interface_J)) {
+    return false;
+  }
+  State& x = *out;
+  x(Index::kCurrent) = current;
+  x(Index::kMotorAngle) = motor0 + h * wm;
+  x(Index::kMotorVelocity) = motor_rate;
+  x(Index::kCableAngle) = cable0 + h * wc;
+  x(Index::kCableVelocity) = 2.0 * wc - cable_rate0;
+  x(Index::kBristle) = 2.0 * z - z0;
+  x(Index::kJointAngle) = joint0 + h * wj;
+  x(Index::kJointVelocity) = 2.0 * wj - joint_rate0;
+  x(Index::kMaxwell) = 2.0 * maxwell_mid - maxwell0;
+  x(Index::kElectricalEnergy) = in(Index::kElectricalEnergy) + electrical_J;
+  x(Index::kPrescribedWork) = in(Index::kPrescribedWork) + prescribed_J;
+  x(Index::kResistiveLoss) = in(Index::kResistiveLoss) + resistive_J;
+  x(Index::kMotorFrictionLoss) = in(Index::kMotorFrictionLoss) + motor_friction_J;
+  x(Index::kContactLoss) = in(Index::kContactLoss) + contact_J;
+  x(Index::kCableFrictionLoss) = in(Index::kCableFrictionLoss) + friction_J;
+  x(Index::kJointViscousLoss) = in(Index::kJointViscousLoss) + joint_viscous_J;
+  x(Index::kInterfaceLoss) = in(Index::kInterfaceLoss) + interface_loss_J;
+  x(Index::kInterfaceEnergy) = in(Index::kInterfaceEnergy) + interface_J;
+  return true;
+}
 
-  const double joint_rate = x(Index::kJointVelocity);
-  d(Index::kJointAngle) = joint_rate;
-  d(Index::kJointVelocity) =
-      (f.tau_sea - f.tau_if - j.viscous_Nm_s_per_rad * joint_rate) / j.inertia_kg_m2;
-  d(Index::kMaxwell) = f.maxwell_rate;
-
-  d(Index::kContactLoss) = f.contact_loss;
-  d(Index::kCableFrictionLoss) = f.friction_loss;
-  d(Index::kJointViscousLoss) = j.viscous_Nm_s_per_rad * joint_rate * joint_rate;
-  d(Index::kInterfaceLoss) = f.interface_loss;
-  d(Index::kInterfaceEnergy) = f.tau_if * joint_rate;
+bool Plant::Halve(const Drive& drive, const SubstepConstants& k, int depth,
+                  State* x) const {
+  if (depth == 0) return false;
+  const SubstepConstants half = MakeConstants(0.5 * k.h);
+  State y = *x;
+  for (int i = 0; i < 2; ++i) {
+    if (!Substep(drive, half, y, &y) && !Halve(drive, half, depth - 1, &y)) return false;
+  }
+  *x = y;
+  return true;
 }
 
 void Plant::Integrate(const Drive& drive, double dt_s) {
-  // ceil(dt / max_step) substeps, tolerant of dt being a rounded multiple of the step.
-  const double ratio = dt_s / params_.integration.max_step_s;
-  const int substeps = std::max(1, static_cast<int>(std::ceil(ratio * (1.0 - 1e-12))));
-  const double h = dt_s / substeps;
-  State k1, k2, k3, k4, probe;
-  for (int s = 0; s < substeps; ++s) {
-    Derivative(x_, drive, &k1);
-    probe = x_ + (0.5 * h) * k1;
-    Derivative(probe, drive, &k2);
-    probe = x_ + (0.5 * h) * k2;
-    Derivative(probe, drive, &k3);
-    probe = x_ + h * k3;
-    Derivative(probe, drive, &k4);
-    x_ += (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  if (dt_s != step_dt_s_) {
+    // ceil(dt / max_step) substeps, tolerant of dt being a rounded multiple of the
+    // step.
+    const double ratio = dt_s / params_.integration.max_step_s;
+    substeps_ = std::max(1, static_cast<int>(std::ceil(ratio * (1.0 - 1e-12))));
+    step_dt_s_ = dt_s;
+    const double h = dt_s / substeps_;
+    if (h != step_.h) step_ = MakeConstants(h);
+  }
+  const int substeps = substeps_;
+  // On a failure the plant stays where it was: nothing is lost, nothing is NaN. (A
+  // failed substep leaves its state untouched, so one substep needs no copy.)
+  constexpr int kMaxHalvings = 8;
+  bool ok = true;
+  if (substeps == 1) {
+    ok = Substep(drive, step_, x_, &x_) || Halve(drive, step_, kMaxHalvings, &x_);
+  } else {
+    State next = x_;
+    for (int s = 0; s < substeps && ok; ++s) {
+      ok = Substep(drive, step_, next, &next) || Halve(drive, step_, kMaxHalvings, &next);
+    }
+    if (ok) x_ = next;
+  }
+  if (!ok) {
+    throw std::runtime_error(
+        "Plant: the state diverged at t = " + std::to_string(time()) +
+        " s; the inputs are beyond what the model integrates");
   }
   time_s_ += dt_s;
 }
@@ -268,22 +486,10 @@ void Plant::Step(double duty, bool bridge_enabled, double dt_s) {
   } else {
     ReturnMagneticEnergy();
   }
-  IntegrateChecked(drive, dt_s);
-  UpdateTruth(drive.voltage_V);
-  SampleMotorCount();
-}
-
-void Plant::IntegrateChecked(const Drive& drive, double dt_s) {
-  const State before = x_;
-  const double time_before = time_s_;
   Integrate(drive, dt_s);
-  if (!x_.allFinite()) {
-    x_ = before;  // the plant stays where it was: nothing is lost, nothing is NaN
-    time_s_ = time_before;
-    throw std::runtime_error(
-        "Plant: the state diverged at t = " + std::to_string(time()) +
-        " s; the inputs are beyond what the model integrates");
-  }
+  voltage_V_ = drive.voltage_V;
+  truth_stale_ = true;
+  SampleMotorCount();
 }
 
 void Plant::StepPrescribedMotor(double pulley_rad, double dt_s) {
@@ -312,9 +518,10 @@ void Plant::StepPrescribedMotor(double pulley_rad, double dt_s) {
   Drive drive;
   drive.prescribed = true;
   drive.pulley_velocity = speed;
-  IntegrateChecked(drive, dt_s);
+  Integrate(drive, dt_s);
   x_(Index::kMotorAngle) = pulley_rad;  // exact (the integral differs by rounding only)
-  UpdateTruth(0.0);
+  voltage_V_ = 0.0;
+  truth_stale_ = true;
   SampleMotorCount();
 }
 
@@ -326,19 +533,51 @@ void Plant::SetInterface(const InterfaceParams& interface) {
   const bool was_sls = params_.interface.present &&
                        params_.interface.model == InterfaceModel::kStandardLinearSolid;
   params_.interface = interface;
+  step_ = MakeConstants(step_.h);
   if (!was_sls) x_(Index::kMaxwell) = x_(Index::kJointAngle);  // a relaxed new arm
   interface_change_work_J_ += InterfacePotential(x_) - before;
-  UpdateTruth(truth_.motor_voltage_V);
+  truth_stale_ = true;
 }
 
-void Plant::UpdateTruth(double voltage_V) {
+double Plant::InterfaceTorque(const State& x) const {
+  const InterfaceParams& ip = params_.interface;
+  if (!ip.present) return 0.0;
+  const double joint = x(Index::kJointAngle);
+  double torque = ip.stiffness_Nm_per_rad * joint + ip.preload_Nm;
+  if (ip.model == InterfaceModel::kKelvinVoigt) {
+    torque += ip.damping_Nm_s_per_rad * x(Index::kJointVelocity);
+  } else {
+    torque += ip.maxwell_stiffness_Nm_per_rad * (joint - x(Index::kMaxwell));
+  }
+  return torque;
+}
+
+double Plant::interface_power_W() const {
+  return InterfaceTorque(x_) * x_(Index::kJointVelocity);
+}
+
+void Plant::RefreshTruth() const {
   const MotorParams& m = params_.motor;
   const CableParams& c = params_.cable;
   const State& x = x_;
-  const Forces f = ComputeForces(x);
+  // The instantaneous forces at the end of the step.
+  const double pulley = c.alpha * x(Index::kMotorAngle);
+  const double pulley_rate = c.alpha * x(Index::kMotorVelocity);
+  const double cable = x(Index::kCableAngle);
+  const double cable_rate = x(Index::kCableVelocity);
+  const double joint = x(Index::kJointAngle);
+  const double joint_rate = x(Index::kJointVelocity);
+  const double contact =
+      Contact(pulley - c.alpha * c.c_right_rad - cable, pulley_rate - cable_rate, c)
+          .torque -
+      Contact(cable - (pulley - c.alpha * c.c_left_rad), cable_rate - pulley_rate, c)
+          .torque;
+  double friction = c.viscous_Nm_s_per_rad * cable_rate;
+  if (c.coulomb_Nm > 0.0) friction += c.bristle_stiffness_Nm_per_rad * x(Index::kBristle);
+  const double interface = InterfaceTorque(x);
   Truth& t = truth_;
   t.time_s = time_s_;
-  t.motor_voltage_V = voltage_V;
+  t.motor_voltage_V = voltage_V_;
   t.motor_current_A = x(Index::kCurrent);
   t.motor_pulley_angle_rad = x(Index::kMotorAngle);
   t.motor_shaft_angle_rad = n_ * x(Index::kMotorAngle);
@@ -347,11 +586,11 @@ void Plant::UpdateTruth(double voltage_V) {
   t.cable_velocity_rad_s = x(Index::kCableVelocity);
   t.joint_angle_rad = x(Index::kJointAngle);
   t.joint_velocity_rad_s = x(Index::kJointVelocity);
-  t.sea_torque_Nm = f.tau_sea;
-  t.contact_torque_Nm = f.tau_r - f.tau_l;
-  t.cable_friction_Nm = f.friction;
-  t.interface_torque_Nm = f.tau_if;
-  t.interface_power_W = f.tau_if * x(Index::kJointVelocity);
+  t.sea_torque_Nm = k_sea_ * (cable - joint);
+  t.contact_torque_Nm = contact;
+  t.cable_friction_Nm = friction;
+  t.interface_torque_Nm = interface;
+  t.interface_power_W = interface * joint_rate;
   t.interface_energy_J = x(Index::kInterfaceEnergy);
   t.electrical_energy_J = x(Index::kElectricalEnergy);
   t.prescribed_work_J = x(Index::kPrescribedWork);
@@ -361,18 +600,13 @@ void Plant::UpdateTruth(double voltage_V) {
   StoredEnergy& s = t.stored;
   const double i = x(Index::kCurrent);
   s.magnetic_J = 0.5 * m.inductance_H * i * i;
-  const double wm = x(Index::kMotorVelocity);
-  const double wc = x(Index::kCableVelocity);
-  const double wj = x(Index::kJointVelocity);
-  s.kinetic_J = 0.5 * (j_eff_ * wm * wm + c.inertia_kg_m2 * wc * wc +
-                       params_.joint.inertia_kg_m2 * wj * wj);
-  const double stretch = x(Index::kCableAngle) - x(Index::kJointAngle);
+  s.kinetic_J = 0.5 * (j_eff_ * x(Index::kMotorVelocity) * x(Index::kMotorVelocity) +
+                       c.inertia_kg_m2 * cable_rate * cable_rate +
+                       params_.joint.inertia_kg_m2 * joint_rate * joint_rate);
+  const double stretch = cable - joint;
   s.sea_spring_J = 0.5 * k_sea_ * stretch * stretch;
-  const double pulley = c.alpha * x(Index::kMotorAngle);
-  const double dr =
-      std::max(0.0, pulley - c.alpha * c.c_right_rad - x(Index::kCableAngle));
-  const double dl =
-      std::max(0.0, x(Index::kCableAngle) - (pulley - c.alpha * c.c_left_rad));
+  const double dr = std::max(0.0, pulley - c.alpha * c.c_right_rad - cable);
+  const double dl = std::max(0.0, cable - (pulley - c.alpha * c.c_left_rad));
   s.contact_spring_J = 0.5 * c.contact_stiffness_Nm_per_rad * (dr * dr + dl * dl);
   const double z = x(Index::kBristle);
   s.bristle_J = c.coulomb_Nm > 0.0 ? 0.5 * c.bristle_stiffness_Nm_per_rad * z * z : 0.0;
@@ -390,7 +624,9 @@ void Plant::UpdateTruth(double voltage_V) {
   d.total_J = d.resistive_J + d.motor_friction_J + d.contact_J + d.cable_friction_J +
               d.joint_viscous_J + d.interface_J;
 
+  t.initial_stored_J = initial_stored_J_;
   t.balance_error_J = t.energy_in_J - (s.total_J - t.initial_stored_J) - d.total_J;
+  truth_stale_ = false;
 }
 
 double Plant::Gaussian() {
@@ -408,11 +644,9 @@ void Plant::SampleMotorCount() {
   if (params_.sensors.motor_noise_counts > 0.0) {
     counts += params_.sensors.motor_noise_counts * Gaussian();
   }
-  // floor: a quadrature counter has counted every edge the shaft has passed. The
-  // int64 cast is safe for |θ_m| < 10^9 rad; a wider angle saturates the floor.
-  const double floored = std::clamp(std::floor(counts), -4.0e18, 4.0e18);
-  const std::int64_t count =
-      static_cast<std::int64_t>(floored) + params_.sensors.motor_count_at_zero;
+  // floor: a quadrature counter has counted every edge the shaft has passed. Exact for
+  // |θ_m| < 10^9 rad; a wider angle saturates the floor.
+  const std::int64_t count = FloorToInt(counts) + params_.sensors.motor_count_at_zero;
   const auto raw =
       static_cast<std::uint16_t>(static_cast<std::uint64_t>(count) & 0xFFFFu);
   FaultSlot& stuck = faults_[static_cast<int>(SensorFaultKind::kMotorStuck)];
@@ -424,9 +658,7 @@ std::uint16_t Plant::JointFrame() {
   if (params_.sensors.joint_noise_counts > 0.0) {
     counts += params_.sensors.joint_noise_counts * Gaussian();
   }
-  const double rounded = std::clamp(std::floor(counts + 0.5), -4.0e18, 4.0e18);
-  std::int64_t count =
-      static_cast<std::int64_t>(rounded) + params_.sensors.joint_zero_count;
+  std::int64_t count = FloorToInt(counts + 0.5) + params_.sensors.joint_zero_count;
   FaultSlot& jump = faults_[static_cast<int>(SensorFaultKind::kJointJump)];
   const std::int32_t jump_counts = jump.jump_counts;
   if (ConsumeFault(&jump)) count += jump_counts;
@@ -461,10 +693,9 @@ void Plant::InjectFault(const SensorFault& fault) {
     if (has_last_joint_frame_) {
       stuck_joint_frame_ = last_joint_frame_;
     } else {
-      const double rounded =
-          std::floor(x_(Index::kJointAngle) * kJointCountsPerRad + 0.5);
       const std::int64_t count =
-          static_cast<std::int64_t>(rounded) + params_.sensors.joint_zero_count;
+          FloorToInt(x_(Index::kJointAngle) * kJointCountsPerRad + 0.5) +
+          params_.sensors.joint_zero_count;
       stuck_joint_frame_ =
           EncodeJointFrame(static_cast<std::uint16_t>(static_cast<std::uint64_t>(count) &
                                                       kJointFrameCountMask),

@@ -1,8 +1,12 @@
 #include "mjc/sim/scenarios.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 namespace mjc::sim {
 namespace {
@@ -109,8 +113,9 @@ CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
   }
   // The backlash is what was fitted; stiffness and zero stay the board's.
   const ControlConfig& board_config = app.control().config();
-  const app::CommandOutcome o = app.SetCalibration(
-      {*config, board_config.sea_stiffness, board_config.joint_encoder.zero_offset});
+  out.record = {*config, board_config.sea_stiffness,
+                board_config.joint_encoder.zero_offset};
+  const app::CommandOutcome o = app.SetCalibration(out.record);
   board.Tick();
   out.uploaded = o.result == app::CommandResult::kAccepted && app.calibrated();
   out.message = out.uploaded ? "uploaded" : "the board refused the calibration";
@@ -134,6 +139,13 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
   // Truth and board power by board tick, from the trial's first tick.
   const std::uint32_t base = app.last().telemetry.tick + 1;
   std::vector<double> truth_energy, truth_power, board_power;
+  // The trial's length (two rests, the cycles) and the flush: no regrowth on the way.
+  const double expected_s =
+      2.0 * sine.rest_ms / 1000.0 + sine.repetitions / sine.frequency.ToDouble() + 0.2;
+  const auto expected_ticks = static_cast<std::size_t>(expected_s * board.tick_hz());
+  truth_energy.reserve(expected_ticks);
+  truth_power.reserve(expected_ticks);
+  board_power.reserve(expected_ticks);
   struct BoardWindow {
     WindowSummary w;
   };
@@ -142,9 +154,10 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
   std::uint32_t flush = 0;
   const std::uint64_t limit = static_cast<std::uint64_t>(board.tick_hz()) * 600;
   for (std::uint64_t i = 0; i < limit; ++i) {
-    const plant::Truth& truth = board.plant().truth();
-    truth_energy.push_back(truth.interface_energy_J);
-    truth_power.push_back(truth.interface_power_W);
+    const plant::Plant& plant = board.plant();
+    const double power_W = plant.interface_power_W();
+    truth_energy.push_back(plant.interface_energy_J());
+    truth_power.push_back(power_W);
     board.Tick();
     const TickResult& r = app.last();
     // The board's power refers to the instant `delay` ticks back.
@@ -156,7 +169,7 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
       out.trace.push_back({static_cast<double>(i) / board.tick_hz(),
                            r.telemetry.setpoint.ToDouble(), r.telemetry.motor.ToDouble(),
                            r.telemetry.joint.ToDouble(), r.telemetry.torque.ToDouble(),
-                           r.telemetry.power.ToDouble(), truth.interface_power_W});
+                           r.telemetry.power.ToDouble(), power_W});
     }
     while (app.PopEvent(&event)) {
       if (event.kind == app::AppEvent::Kind::kWindow) windows.push_back({event.window});
@@ -221,22 +234,10 @@ std::vector<const WindowOutcome*> AnalysedFlexions(const TrialOutcome& trial,
   return out;
 }
 
-RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams& subject,
-                                      double amplitude_deg, std::uint64_t seed,
-                                      const ProgressFn& progress, double progress_from,
-                                      double progress_to) {
+RepeatabilityOutcome SummariseRepeatability(std::vector<TrialOutcome> trials) {
   RepeatabilityOutcome out;
   std::vector<double> all, all_truth;
-  const int kTrials = 5;
-  for (int trial = 0; trial < kTrials; ++trial) {
-    if (progress) {
-      progress("repeatability: trial " + std::to_string(trial + 1) + "/5",
-               progress_from + (progress_to - progress_from) * trial / kTrials);
-    }
-    // Re-don: a new seeded perturbation of the subject's interface.
-    board.plant().SetInterface(
-        plant::Redon(subject, seed + static_cast<std::uint64_t>(trial)).interface);
-    TrialOutcome t = RunTrial(board, PaperSine(amplitude_deg), trial == 0);
+  for (TrialOutcome& t : trials) {
     std::vector<double> eta, truth_eta;
     for (const WindowOutcome* w : AnalysedFlexions(t, 5)) {
       eta.push_back(w->eta);
@@ -253,55 +254,67 @@ RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams&
   return out;
 }
 
-SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subject,
-                               const std::vector<double>& amplitudes_deg,
-                               const ProgressFn& progress, double progress_from,
-                               double progress_to) {
-  SubjectSweep out;
-  out.subject = subject.name;
-  board.plant().SetInterface(subject.interface);
-  std::vector<double> load, unload, net, tload, tunload, tnet;
-  for (std::size_t i = 0; i < amplitudes_deg.size(); ++i) {
-    const double a = amplitudes_deg[i];
+RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams& subject,
+                                      double amplitude_deg, std::uint64_t seed,
+                                      const ProgressFn& progress, double progress_from,
+                                      double progress_to) {
+  std::vector<TrialOutcome> trials;
+  const int kTrials = 5;
+  for (int trial = 0; trial < kTrials; ++trial) {
     if (progress) {
-      progress("amplitude sweep: " + subject.name + " " +
-                   std::to_string(static_cast<int>(a)) + "°",
-               progress_from + (progress_to - progress_from) * static_cast<double>(i) /
-                                   static_cast<double>(amplitudes_deg.size()));
+      progress("repeatability: trial " + std::to_string(trial + 1) + "/5",
+               progress_from + (progress_to - progress_from) * trial / kTrials);
     }
-    const TrialOutcome t = RunTrial(board, PaperSine(a), false);
-    AmplitudePoint pt;
-    pt.amplitude_deg = a;
-    std::vector<double> l, u, n, e, tl, tu, tn, te;
-    for (const WindowOutcome* w : AnalysedFlexions(t, 5)) {
-      l.push_back(w->load);
-      u.push_back(w->unload);
-      n.push_back(w->net);
-      e.push_back(w->eta);
-      tl.push_back(w->truth_load);
-      tu.push_back(w->truth_unload);
-      tn.push_back(w->truth_net);
-      te.push_back(w->truth_eta);
-      pt.flexions.push_back(*w);
-    }
-    pt.load = host::Describe(l);
-    pt.unload = host::Describe(u);
-    pt.net = host::Describe(n);
-    pt.eta = host::Describe(e);
-    pt.truth_load = host::Describe(tl);
-    pt.truth_unload = host::Describe(tu);
-    pt.truth_net = host::Describe(tn);
-    pt.truth_eta = host::Describe(te);
-    pt.power_rmse_pct_peak =
-        t.truth_peak_power_W > 0 ? 100.0 * t.power_rmse_W / t.truth_peak_power_W : 0.0;
+    // Re-don: a new seeded perturbation of the subject's interface.
+    board.plant().SetInterface(
+        plant::Redon(subject, seed + static_cast<std::uint64_t>(trial)).interface);
+    trials.push_back(RunTrial(board, PaperSine(amplitude_deg), trial == 0));
+  }
+  return SummariseRepeatability(std::move(trials));
+}
+
+AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& t) {
+  AmplitudePoint pt;
+  pt.amplitude_deg = amplitude_deg;
+  std::vector<double> l, u, n, e, tl, tu, tn, te;
+  for (const WindowOutcome* w : AnalysedFlexions(t, 5)) {
+    l.push_back(w->load);
+    u.push_back(w->unload);
+    n.push_back(w->net);
+    e.push_back(w->eta);
+    tl.push_back(w->truth_load);
+    tu.push_back(w->truth_unload);
+    tn.push_back(w->truth_net);
+    te.push_back(w->truth_eta);
+    pt.flexions.push_back(*w);
+  }
+  pt.load = host::Describe(l);
+  pt.unload = host::Describe(u);
+  pt.net = host::Describe(n);
+  pt.eta = host::Describe(e);
+  pt.truth_load = host::Describe(tl);
+  pt.truth_unload = host::Describe(tu);
+  pt.truth_net = host::Describe(tn);
+  pt.truth_eta = host::Describe(te);
+  pt.power_rmse_pct_peak =
+      t.truth_peak_power_W > 0 ? 100.0 * t.power_rmse_W / t.truth_peak_power_W : 0.0;
+  return pt;
+}
+
+SubjectSweep SummariseSweep(const std::string& subject,
+                            std::vector<AmplitudePoint> points) {
+  SubjectSweep out;
+  out.subject = subject;
+  std::vector<double> load, unload, net, tload, tunload, tnet;
+  for (const AmplitudePoint& pt : points) {
     load.push_back(pt.load.mean);
     unload.push_back(pt.unload.mean);
     net.push_back(pt.net.mean);
     tload.push_back(pt.truth_load.mean);
     tunload.push_back(pt.truth_unload.mean);
     tnet.push_back(pt.truth_net.mean);
-    out.points.push_back(std::move(pt));
   }
+  out.points = std::move(points);
   auto nrmse = [](const std::vector<double>& a, const std::vector<double>& b,
                   double* rmse) {
     *rmse = host::Rmse(a, b);
@@ -311,6 +324,75 @@ SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subjec
   out.nrmse_load = nrmse(load, tload, &out.rmse_load);
   out.nrmse_unload = nrmse(unload, tunload, &out.rmse_unload);
   out.nrmse_net = nrmse(net, tnet, &out.rmse_net);
+  return out;
+}
+
+SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subject,
+                               const std::vector<double>& amplitudes_deg,
+                               const ProgressFn& progress, double progress_from,
+                               double progress_to) {
+  board.plant().SetInterface(subject.interface);
+  std::vector<AmplitudePoint> points;
+  for (std::size_t i = 0; i < amplitudes_deg.size(); ++i) {
+    const double a = amplitudes_deg[i];
+    if (progress) {
+      progress("amplitude sweep: " + subject.name + " " +
+                   std::to_string(static_cast<int>(a)) + "°",
+               progress_from + (progress_to - progress_from) * static_cast<double>(i) /
+                                   static_cast<double>(amplitudes_deg.size()));
+    }
+    points.push_back(SummarisePoint(a, RunTrial(board, PaperSine(a), false)));
+  }
+  return SummariseSweep(subject.name, std::move(points));
+}
+
+std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
+                                    const ControlConfig& config,
+                                    const Calibration& record,
+                                    const std::vector<TrialSpec>& specs, int threads,
+                                    const ProgressFn& progress) {
+  std::vector<TrialOutcome> out(specs.size());
+  std::vector<std::exception_ptr> errors(specs.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex progress_mutex;
+  std::size_t done = 0;
+  const auto work = [&] {
+    for (std::size_t i = next++; i < specs.size(); i = next++) {
+      const TrialSpec& spec = specs[i];
+      try {
+        plant::PlantParams params = robot;
+        params.interface = spec.interface;
+        params.sensors.noise_seed = spec.noise_seed;
+        SimBoard board(params, config);
+        board.app().SetCalibration(record);
+        board.Tick();
+        out[i] = RunTrial(board, PaperSine(spec.amplitude_deg), spec.keep_trace);
+      } catch (...) {
+        errors[i] = std::current_exception();
+      }
+      if (progress) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        ++done;
+        progress(spec.label,
+                 static_cast<double>(done) / static_cast<double>(specs.size()));
+      }
+    }
+  };
+  if (threads <= 0) threads = static_cast<int>(std::thread::hardware_concurrency());
+  const std::size_t workers =
+      std::clamp<std::size_t>(static_cast<std::size_t>(std::max(threads, 1)), 1,
+                              std::max<std::size_t>(specs.size(), 1));
+  if (workers == 1) {
+    work();
+  } else {
+    std::vector<std::thread> pool;
+    for (std::size_t w = 0; w < workers; ++w) pool.emplace_back(work);
+    for (std::thread& t : pool) t.join();
+  }
+  // The first failure in spec order, whatever the order the runs ended in.
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
   return out;
 }
 

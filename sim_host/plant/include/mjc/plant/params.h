@@ -107,9 +107,9 @@ struct SensorParams {
 };
 
 struct IntegrationParams {
-  // Longest RK4 substep, s, [1e-7, 1e-3]: a Step of dt runs ceil(dt / max_step_s)
-  // equal substeps (10 µs: ten substeps a 10 kHz tick).
-  double max_step_s = 1e-5;
+  // Longest substep, s, [1e-7, 1e-3]: a Step of dt runs ceil(dt / max_step_s) equal
+  // substeps (100 µs: one a 10 kHz tick; the scheme is in plant.h).
+  double max_step_s = 1e-4;
 };
 
 struct PlantParams {
@@ -141,7 +141,7 @@ PlantParams ParsePlantParams(std::string_view json_text, std::string_view source
 std::string PlantParamsToJson(const PlantParams& params);
 
 // Throws std::runtime_error("<source>: field '<section.field>' ...") if any value is out
-// of its documented range or the RK4 step cannot resolve the fastest mode.
+// of its documented range or the substep cannot resolve a mode the sensors follow.
 void ValidatePlantParams(const PlantParams& params, std::string_view source);
 
 // Re-donning: the same subject with the exoskeleton taken off and put on again (the

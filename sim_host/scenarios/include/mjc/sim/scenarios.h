@@ -32,6 +32,7 @@ struct CalibrationOutcome {
   double error_right_deg = 0;  // fitted − true
   double error_left_deg = 0;
   bool uploaded = false;  // accepted by ToFirmwareConfig and by the board
+  Calibration record;     // what was uploaded (when uploaded)
   std::string message;
   // θ_m, θ_j as the board measured them, every 10th tick (Fig. 7).
   std::vector<double> motor_rad;
@@ -117,5 +118,33 @@ SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subjec
                                const std::vector<double>& amplitudes_deg,
                                const ProgressFn& progress, double progress_from,
                                double progress_to);
+
+// The statistics of the two functions above, from trials already run.
+RepeatabilityOutcome SummariseRepeatability(std::vector<TrialOutcome> trials);
+AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& trial);
+SubjectSweep SummariseSweep(const std::string& subject,
+                            std::vector<AmplitudePoint> points);
+
+// One trial on a board of its own: the robot with `interface` donned and its sensor
+// noise seeded by `noise_seed`, powered up at rest, given the calibration record, then
+// PaperSine(amplitude_deg).
+struct TrialSpec {
+  plant::InterfaceParams interface;
+  double amplitude_deg = 25.0;
+  bool keep_trace = false;
+  std::uint64_t noise_seed = 1;
+  std::string label;  // for progress lines
+};
+
+// Runs every spec on `threads` threads (0: one per core; 1: in the calling thread).
+// A trial depends on nothing but its spec, so the outcomes, in spec order, are the
+// same bit for bit whatever the number of threads. `progress` is called once per
+// finished trial, serialised, in the order they finish. Rethrows the first spec's
+// exception, if any, after all have run.
+std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
+                                    const ControlConfig& config,
+                                    const Calibration& record,
+                                    const std::vector<TrialSpec>& specs, int threads,
+                                    const ProgressFn& progress);
 
 }  // namespace mjc::sim
