@@ -38,6 +38,26 @@ void CheckWritable(const std::filesystem::path& path) {
   }
 }
 
+// The sweep's samples beside the calibration file: calibration.json →
+// calibration.sweep.csv. Kept whether the sweep ended or was interrupted, so what the
+// board recorded is never lost and can be fitted again.
+std::filesystem::path SweepPath(const std::filesystem::path& out) {
+  std::filesystem::path p = out;
+  return p.replace_extension(".sweep.csv");
+}
+
+void WriteSweep(const std::filesystem::path& path, int rate_hz,
+                const std::vector<double>& motor, const std::vector<double>& joint) {
+  std::string text = "# mjc calibrate sweep: the board's angle telemetry at " +
+                     std::to_string(rate_hz) + " Hz\nmotor_rad,joint_rad\n";
+  char line[64];
+  for (std::size_t i = 0; i < motor.size(); ++i) {
+    std::snprintf(line, sizeof line, "%.9g,%.9g\n", motor[i], joint[i]);
+    text += line;
+  }
+  host::WriteFile(path, text);
+}
+
 bool SameCalibration(const CalibrationRecord& a, const CalibrationRecord& b) {
   return a.backlash.c_right == b.backlash.c_right &&
          a.backlash.c_left == b.backlash.c_left && a.backlash.alpha == b.backlash.alpha &&
@@ -75,6 +95,10 @@ void AddCalibrate(CLI::App& app) {
     host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
                             host::HostHeartbeats::kSend);
     SayBusOff(board, "mjc calibrate", iface);
+    // Ctrl-C (or SIGTERM, SIGHUP) ends the sweep: the board is stopped and the samples
+    // that arrived are saved.
+    const std::atomic<bool>& interrupted = StopOnSignals();
+    board.SetInterrupt(&interrupted);
     const std::string who = "node " + std::to_string(node);
     std::string why;
 
@@ -99,7 +123,8 @@ void AddCalibrate(CLI::App& app) {
     sweep.repetitions = static_cast<std::uint8_t>(cycles);
     sweep.rest_100ms = 5;
     if (!board.Send(sweep, &why)) throw Failure(why);
-    const auto outcome = board.Command(CommandCode::kStartSweep, 1000, &why);
+    const auto outcome =
+        board.Command(CommandCode::kStartSweep, host::kStartAnswerMs, &why);
     if (!outcome) throw Failure(NoAnswer(board), why);
     if (*outcome != CommandOutcomeCode::kAccepted) {
       throw Failure(Exit::kRefused, who + " refused the sweep: " +
@@ -130,27 +155,37 @@ void AddCalibrate(CLI::App& app) {
     const host::Patience patience{
         std::chrono::milliseconds(static_cast<long>(2000 * expected_s) + 2000)};
     host::WaitEnd end{};
-    if (!board.Await(finished, patience, &end, &why)) {
+    const bool ended = board.Await(finished, patience, &end, &why);
+    board.KeepAngles(false);
+    // The stop first (the motor must not wait for a file), then the samples, kept
+    // however the sweep ended.
+    const std::string stopped =
+        !ended && end == host::WaitEnd::kInterrupted ? StopMotion(board) : "";
+    const std::filesystem::path sweep_path = SweepPath(out_path);
+    WriteSweep(sweep_path, *rate_hz, motor, joint);
+    const std::string kept = "; " + std::to_string(motor.size()) +
+                             " sweep samples saved to " + sweep_path.string();
+    if (!ended) {
       switch (end) {
         case host::WaitEnd::kLinkFailed:
-          throw Failure(why);
+          throw Failure(why + kept);
         case host::WaitEnd::kInterrupted:
-          throw Failure(Exit::kFailure, "interrupted");
+          throw Failure(Exit::kStopped,
+                        "interrupted: " + stopped + kept + " (not fitted)");
         case host::WaitEnd::kSilent:
           throw Failure(Exit::kNoAnswer,
-                        who + " went silent during the sweep (" + why + ")");
+                        who + " went silent during the sweep (" + why + ")" + kept);
         case host::WaitEnd::kBoardTime:
           throw Failure(Exit::kNoAnswer, who +
                                              "'s sweep did not finish within twice its "
                                              "length (" +
-                                             why + ")");
+                                             why + ")" + kept);
       }
     }
     if (board.status().state == BoardState::kFault) {
       throw Failure(Exit::kFaulted, who + " faulted during the sweep: fault " +
-                                        host::DescribeFault(board.status().fault));
+                                        host::DescribeFault(board.status().fault) + kept);
     }
-    board.KeepAngles(false);
     // A lost sample shifts every later one in time: the lag fit would read it as lag.
     const std::uint64_t dropped = link->stats().rx_dropped - dropped_before;
     const std::uint64_t malformed = board.malformed() - malformed_before;

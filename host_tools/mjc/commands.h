@@ -4,6 +4,8 @@
 // main prints "mjc <subcommand>: <what>" on one line.
 #pragma once
 
+#include <signal.h>
+
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
@@ -32,6 +34,8 @@ enum class Exit : int {
   kNoAnswer = 3,  // a node did not answer, went silent or did not finish in time
   kRefused = 4,   // the board refused, holds no calibration, or did not keep it
   kFaulted = 5,   // the board faulted while carrying it out
+  kStopped = 6,   // the motion ended before its end: interrupted here (a signal; the
+                  // board was told to stop) or stopped by another tool
 };
 
 // The footer of every --help.
@@ -39,7 +43,9 @@ inline constexpr const char* kExitStatusHelp =
     "Exit status: 0 done; 1 failed on this side (input or output file, interface, "
     "link, unusable fit, gnuplot); 2 bad command line; 3 a node did not answer, went "
     "silent or did not finish in time; 4 the board refused, holds no calibration or "
-    "did not keep what was sent; 5 the board faulted.";
+    "did not keep what was sent; 5 the board faulted; 6 the motion was stopped before "
+    "its end (interrupted: the board was stopped and what arrived is saved; or stopped "
+    "by another tool).";
 
 class Failure : public std::runtime_error {
  public:
@@ -99,12 +105,29 @@ inline std::atomic<bool> g_stop{false};
 inline void OnStopSignal(int) { g_stop = true; }
 }  // namespace detail
 
-// Makes SIGINT and SIGTERM end a long-running command cleanly (files flushed, counts
-// printed): the returned flag turns true when one arrives.
+// Makes SIGINT, SIGTERM and SIGHUP (Ctrl-C, kill, a closed terminal) end a
+// long-running command cleanly — a motion it started stopped, files flushed, counts
+// printed: the returned flag turns true when one arrives. Without SA_RESTART, so a
+// blocking read (a prompt) returns at once.
 inline const std::atomic<bool>& StopOnSignals() {
-  std::signal(SIGINT, detail::OnStopSignal);
-  std::signal(SIGTERM, detail::OnStopSignal);
+  struct sigaction action = {};
+  action.sa_handler = detail::OnStopSignal;
+  sigemptyset(&action.sa_mask);
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) sigaction(signal, &action, nullptr);
   return detail::g_stop;
+}
+
+// Stops the motion `board` runs, confirmed by the board, whatever interrupted the
+// client's waits: "node N stopped", or why it could not be confirmed.
+inline std::string StopMotion(host::BoardClient& board) {
+  board.SetInterrupt(nullptr);
+  std::string why;
+  const auto outcome = board.Command(protocol::CommandCode::kStop, 1000, &why);
+  const std::string who = "node " + std::to_string(board.node());
+  if (outcome && *outcome == protocol::CommandOutcomeCode::kAccepted)
+    return who + " stopped";
+  return who + " did not confirm the stop (" + (outcome ? "refused" : why) +
+         "); it stops by itself once this tool's heartbeat stays away";
 }
 
 void AddSim(CLI::App& app);

@@ -32,7 +32,8 @@ Exit ExitOf(host::TrialEnd end) {
     case host::TrialEnd::kFaulted:
       return Exit::kFaulted;
     case host::TrialEnd::kInterrupted:
-      return Exit::kFailure;
+    case host::TrialEnd::kStopped:
+      return Exit::kStopped;
   }
   return Exit::kFailure;
 }
@@ -83,6 +84,11 @@ void AddTrial(CLI::App& app) {
     host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
                             host::HostHeartbeats::kSend);
     SayBusOff(board, "mjc trial", iface);
+    // Ctrl-C (or SIGTERM, SIGHUP) ends the waits: the motion is stopped and every
+    // window that arrived is kept.
+    const std::atomic<bool>& interrupted = StopOnSignals();
+    board.SetInterrupt(&interrupted);
+    const std::string saved = out_dir + "/windows.csv";
     const bool repeatability = protocol_name == "repeatability";
     const std::vector<double> plan =
         repeatability
@@ -94,6 +100,12 @@ void AddTrial(CLI::App& app) {
                      plan.size());
         std::string line;
         std::getline(std::cin, line);
+        if (interrupted) {
+          throw Failure(Exit::kStopped, "interrupted before trial " +
+                                            std::to_string(t + 1) + " (node " +
+                                            std::to_string(node) +
+                                            " at rest); earlier trials are in " + saved);
+        }
       }
       protocol::TrialConfig config;
       config.amplitude = Angle::Quantize(host::DegToRad(plan[t]));
@@ -109,9 +121,23 @@ void AddTrial(CLI::App& app) {
           });
       std::fputc('\n', stderr);
       if (!trial.completed) {
+        // The motor first: a file can wait, a finger should not.
+        const std::string stopped =
+            trial.end == host::TrialEnd::kInterrupted ? StopMotion(board) : "";
+        // What arrived is kept, the interrupted trial's windows included.
+        if (!trial.windows.empty()) {
+          runs.push_back({plan[t], static_cast<std::uint16_t>(reps), trial.windows});
+          host::WriteWindowsCsv(runs, out_dir);
+        }
+        std::size_t windows = 0;
+        for (const host::TrialWindows& r : runs) windows += r.windows.size();
+        const std::string kept = std::to_string(windows) + " windows saved to " + saved;
+        if (trial.end == host::TrialEnd::kInterrupted) {
+          throw Failure(Exit::kStopped, "interrupted: " + stopped + "; " + kept);
+        }
         throw Failure(ExitOf(trial.end), "node " + std::to_string(node) + ", trial " +
                                              std::to_string(t + 1) + ": " + trial.error +
-                                             " (earlier trials are in windows.csv)");
+                                             "; " + kept);
       }
       // A flexion and an extension window a repetition: fewer means some were lost on
       // the bus (the tables then use those that arrived).

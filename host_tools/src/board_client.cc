@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <optional>
+#include <random>
 #include <utility>
 
 namespace mjc::host {
@@ -17,6 +18,13 @@ BoardClient::BoardClient(CanLink* link, std::uint8_t node, HostHeartbeats heartb
       now_(std::move(now)),
       bus_off_at_start_(link->stats().bus_off),
       bus_off_seen_(bus_off_at_start_) {
+  // A session of its own when it supervises: its motions are kept alive by its
+  // heartbeats alone. Random, so two tools (or two hosts) rarely share one.
+  if (heartbeats_ == HostHeartbeats::kSend) {
+    std::random_device random;
+    std::uniform_int_distribution<int> pick(1, 0xFFFF);
+    session_ = static_cast<SessionId>(pick(random));
+  }
   // Only a saving: Handle checks the node itself, so a link that cannot filter works.
   const IdFilter only_node{node, 0x00F};
   std::string why;
@@ -81,7 +89,7 @@ std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int tim
                                                        std::string* why) {
   const std::uint8_t seq = ++sequence_;
   last_result_.reset();
-  if (!Send(protocol::Command{code, seq}, why)) return std::nullopt;
+  if (!Send(protocol::Command{code, seq, session_}, why)) return std::nullopt;
   const auto answered = [&] {
     return last_result_ && last_result_->sequence == seq && last_result_->code == code;
   };
@@ -149,7 +157,7 @@ bool BoardClient::Beat(std::string* why) {
   next_heartbeat_ = now - next_heartbeat_ < kHostHeartbeatPeriod
                         ? next_heartbeat_ + kHostHeartbeatPeriod
                         : now + kHostHeartbeatPeriod;
-  return Send(HostHeartbeat{heartbeat_sequence_++}, why);
+  return Send(HostHeartbeat{heartbeat_sequence_++, session_}, why);
 }
 
 void BoardClient::NoteBusOff() {

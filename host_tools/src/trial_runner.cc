@@ -24,13 +24,26 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
   };
   std::string why;
   board.TakeWindows();
+  const std::uint64_t broken_before = board.incomplete_windows();
   if (!board.Send(config, &why)) return fail(TrialEnd::kLinkFailed, why);
-  const auto outcome = board.Command(CommandCode::kStartTrial, 1000, &why);
+  const auto outcome = board.Command(CommandCode::kStartTrial, kStartAnswerMs, &why);
   if (!outcome) {
     if (board.interrupted()) return fail(TrialEnd::kInterrupted, why);
     return fail(board.link_failed() ? TrialEnd::kLinkFailed : TrialEnd::kNoAnswer, why);
   }
   if (*outcome != CommandOutcomeCode::kAccepted) {
+    // Not idle: a latched fault is the usual reason, and it has a remedy to name.
+    WaitEnd end{};
+    const std::chrono::milliseconds second{1000};
+    if (*outcome == CommandOutcomeCode::kRefusedNotIdle &&
+        board.Await([&] { return board.status().heard; }, {second, second}, &end, &why) &&
+        board.status().state == BoardState::kFault) {
+      return fail(TrialEnd::kRefused, "the board refused the trial: it holds fault " +
+                                          DescribeFault(board.status().fault) +
+                                          "; clear it with mjc clear --node " +
+                                          std::to_string(board.node()) +
+                                          " once its cause is gone");
+    }
     return fail(TrialEnd::kRefused,
                 "the board refused the trial: " + std::string(OutcomeName(*outcome)));
   }
@@ -67,6 +80,16 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
   if (board.status().state == BoardState::kFault) {
     return fail(TrialEnd::kFaulted,
                 "the board faulted: fault " + DescribeFault(board.status().fault));
+  }
+  // Idle before its end: every repetition makes a flexion and an extension window,
+  // each either received or counted as broken on the bus.
+  const std::size_t expected = 2u * config.repetitions;
+  const std::uint64_t broken = board.incomplete_windows() - broken_before;
+  if (out.windows.size() + broken < expected) {
+    return fail(TrialEnd::kStopped, "the trial was stopped before its end, after " +
+                                        std::to_string(out.windows.size()) + " of " +
+                                        std::to_string(expected) +
+                                        " windows (by another tool's stop?)");
   }
   out.end = TrialEnd::kCompleted;
   out.completed = true;

@@ -22,6 +22,8 @@ using protocol::CommandOutcomeCode;
 
 constexpr double kPi = std::numbers::pi;
 constexpr std::uint8_t kNode = 1;
+// The rig's host session: its motions are supervised by its heartbeats.
+constexpr protocol::SessionId kSession = 0x5EED;
 
 // The trial: the paper's 25° at 0.5 Hz, 200 ms of rest first. On subject1 it swings
 // the motor pulley ±0.435 rad, the joint ±0.053 rad, the SEA torque ±0.23 N·m and the
@@ -322,7 +324,7 @@ class Rig {
   }
 
   std::uint8_t SendCommand(CommandCode code) {
-    Send(protocol::Command{code, ++sequence_});
+    Send(protocol::Command{code, ++sequence_, kSession});
     return sequence_;
   }
 
@@ -381,7 +383,7 @@ class Rig {
   void HostSide() {
     const std::uint32_t hz = board_.tick_hz();
     if (heartbeats_ && next_tick_ >= next_heartbeat_tick_ && next_tick_ > 0) {
-      Send(protocol::HostHeartbeat{++heartbeat_sequence_});
+      Send(protocol::HostHeartbeat{++heartbeat_sequence_, kSession});
       if (!bus_down_) last_heartbeat_rx_ = now();
       next_heartbeat_tick_ = next_tick_ + hz / 10;  // 10 Hz
     }

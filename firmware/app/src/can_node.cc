@@ -271,8 +271,8 @@ void CanNode::HandleFrame(const CanFrame& frame) {
       return;
     case Function::kHostHeartbeat: {
       HostHeartbeat h;
-      if (count(Decode(frame, &h))) {
-        host_armed_ = true;
+      // Only the heartbeat of the session that started the motion keeps it going.
+      if (count(Decode(frame, &h)) && h.session != 0 && h.session == motion_session_) {
         last_host_tick_ = now_;
       }
       return;
@@ -288,6 +288,12 @@ void CanNode::HandleCommand(const Command& c) {
       Tag(static_cast<std::uint8_t>(Origin::kCommand),
           (std::uint32_t{static_cast<std::uint8_t>(c.code)} << 8) | c.sequence);
   const std::uint32_t hz = app_->control().config().tick_hz;
+  const bool start = c.code == CommandCode::kStartTrial ||
+                     c.code == CommandCode::kStartSweep ||
+                     c.code == CommandCode::kStartStream;
+  // One start at a time in the mailbox, so that the session its verdict binds the
+  // motion to is known without doubt.
+  if (start && start_pending_) return Answer(tag, {CommandResult::kRefusedBusy, 0});
   CommandOutcome o;
   switch (c.code) {
     case CommandCode::kStop:
@@ -325,7 +331,11 @@ void CanNode::HandleCommand(const Command& c) {
       break;
   }
   // Accepted: answered with the tick's verdict (SendEvent).
-  if (o.result != CommandResult::kAccepted) Answer(tag, o);
+  if (o.result != CommandResult::kAccepted) return Answer(tag, o);
+  if (start) {
+    start_pending_ = true;
+    start_session_ = c.session;
+  }
 }
 
 void CanNode::SendParam(ParamId id, ParamStatus status) {
@@ -442,13 +452,25 @@ void CanNode::SendEvent(const AppEvent& e) {
       if (origin == Origin::kParam || origin == Origin::kCalibration) {
         config_change_pending_ = false;
       }
-      const bool stream_started =
-          origin == Origin::kCommand && e.outcome.result == CommandResult::kAccepted &&
-          ((e.tag >> 8) & 0xFFu) == static_cast<std::uint8_t>(CommandCode::kStartStream);
-      if (stream_started) last_setpoint_tick_ = e.tick;
+      const auto code = static_cast<CommandCode>((e.tag >> 8) & 0xFFu);
+      const bool start =
+          origin == Origin::kCommand &&
+          (code == CommandCode::kStartTrial || code == CommandCode::kStartSweep ||
+           code == CommandCode::kStartStream);
+      if (start) {
+        start_pending_ = false;
+        if (e.outcome.result == CommandResult::kAccepted) {
+          // The motion is its commander's: supervised by its heartbeats from now on.
+          motion_session_ = start_session_;
+          last_host_tick_ = e.tick;
+          if (code == CommandCode::kStartStream) last_setpoint_tick_ = e.tick;
+        }
+      }
       return Answer(e.tag, e.outcome);
     }
     case AppEvent::Kind::kStateChanged:
+      // A motion that ended is nobody's any more.
+      if (e.state == AppState::kIdle || e.state == AppState::kFault) motion_session_ = 0;
       next_heartbeat_ = now_;  // tell the host at once
       return;
     case AppEvent::Kind::kWindow: {
@@ -519,18 +541,15 @@ void CanNode::Poll() {
     ++counters_.stream_timeouts;
     last_setpoint_tick_ = now_;  // once: the fault ends the stream
   }
-  const bool moving =
-      last.state == AppState::kRunning || last.state == AppState::kCalibrating;
+  // Host supervision: a motion whose commanding session went quiet stops.
   const bool host_quiet =
-      host_armed_ && config_.host_timeout_ms != 0 &&
+      motion_session_ != 0 && config_.host_timeout_ms != 0 &&
       now_ - last_host_tick_ >
           TicksFromMs(config_.host_timeout_ms, app_->control().config().tick_hz);
   if (host_quiet) {
-    host_armed_ = false;  // once; the next heartbeat arms it again
-    if (moving) {
-      app_->RaiseFault(Fault::kHostHeartbeatLost);
-      ++counters_.host_timeouts;
-    }
+    motion_session_ = 0;  // once: the fault ends the motion
+    app_->RaiseFault(Fault::kHostHeartbeatLost);
+    ++counters_.host_timeouts;
   }
 
   if (Due(config_.angles_hz, &next_angles_)) Send(TelemetryAngles{t.motor, t.joint});

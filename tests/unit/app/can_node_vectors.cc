@@ -279,36 +279,46 @@ MJC_VECTOR_TEST(CanNode, ParameterWritesKeepTheClockAndTelemetryRunning) {
 }
 
 // A trial long enough to outlast the tests below: 0.5 Hz, 5 repetitions.
-void StartLongTrial(Board& b, std::uint8_t sequence) {
+// Starts a 10 s trial commanded by `session` (0: none).
+void StartLongTrial(Board& b, std::uint8_t sequence, SessionId session = 0) {
   TrialConfig t;
   t.amplitude = Angle::FromDouble(0.2);
   t.frequency_mHz = 500;
   t.repetitions = 5;
   t.rest_100ms = 0;
   b.node.HandleFrame(Encode(t, 1));
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, sequence}, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, sequence, session}, 1));
   b.Run(1);
 }
 
 MJC_VECTOR_TEST(CanNode, LostHostHeartbeatStopsAMotionButNotARest) {
   static Board b;
   Calibrate(b);
-  // A host that never sends heartbeats is not supervised.
-  StartLongTrial(b, 1);
-  b.Run(5000);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
-  b.node.HandleFrame(Encode(Command{CommandCode::kStop, 2}, 1));
-  b.Run(2);
-  // A supervising host: heartbeats every 100 ms keep the trial running...
-  StartLongTrial(b, 3);
-  for (int i = 0; i < 20; ++i) {
-    b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i)}, 1));
+  // A motion started without a session (a tool that sends no heartbeats) is not
+  // supervised, whoever else sends heartbeats.
+  StartLongTrial(b, 1, 0);
+  for (int i = 0; i < 5; ++i) {
+    b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i), 0x1111}, 1));
     b.Run(1000);
   }
   VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
-  // ...and their loss stops it within the 300 ms timeout plus a tick.
+  b.node.HandleFrame(Encode(Command{CommandCode::kStop, 2}, 1));
+  b.Run(2);
+  // Session 0x1234's heartbeats every 100 ms keep its trial running...
+  StartLongTrial(b, 3, 0x1234);
+  for (int i = 0; i < 20; ++i) {
+    b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i), 0x1234}, 1));
+    b.Run(1000);
+  }
+  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  // ...and their loss stops it within the 300 ms timeout plus a tick, although another
+  // session (a monitor) goes on sending its own.
   int ticks = 0;
   while (b.app.state() == AppState::kRunning && ticks < 10000) {
+    if (ticks % 1000 == 0) {
+      b.node.HandleFrame(
+          Encode(HostHeartbeat{static_cast<std::uint8_t>(ticks), 0x4321}, 1));
+    }
     b.Run(1);
     ++ticks;
   }
@@ -320,14 +330,58 @@ MJC_VECTOR_TEST(CanNode, LostHostHeartbeatStopsAMotionButNotARest) {
   b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 4}, 1));
   b.Run(2);
   VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
-  // A host that goes quiet while the board rests faults nothing, and the next motion
-  // (from a tool without heartbeats) is not supervised by the stale ones.
-  b.node.HandleFrame(Encode(HostHeartbeat{30}, 1));
+  // A session that goes quiet while the board rests faults nothing, and the next motion
+  // (from a tool without a session) is not supervised by the stale one.
+  b.node.HandleFrame(Encode(HostHeartbeat{30, 0x1234}, 1));
   b.Run(5000);
   VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
-  StartLongTrial(b, 5);
+  StartLongTrial(b, 5, 0);
   b.Run(5000);
   VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_EQ(b.node.counters().host_timeouts, 1u);
+  b.node.HandleFrame(Encode(Command{CommandCode::kStop, 6}, 1));
+  b.Run(2);
+  // A motion ended by its own commander's stop leaves no supervision behind: the next
+  // one of another session is judged by that session's heartbeats alone.
+  StartLongTrial(b, 7, 0x1234);
+  b.node.HandleFrame(Encode(Command{CommandCode::kStop, 8, 0x1234}, 1));
+  b.Run(2);
+  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  StartLongTrial(b, 9, 0x7777);
+  for (int i = 0; i < 10; ++i) {
+    b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i), 0x7777}, 1));
+    b.Run(1000);
+  }
+  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_EQ(b.node.counters().host_timeouts, 1u);
+}
+
+MJC_VECTOR_TEST(CanNode, OneStartAtATimeAwaitsItsVerdict) {
+  static Board b;
+  Calibrate(b);
+  TrialConfig t;
+  t.amplitude = Angle::FromDouble(0.2);
+  t.frequency_mHz = 500;
+  t.repetitions = 5;
+  t.rest_100ms = 0;
+  b.node.HandleFrame(Encode(t, 1));
+  // Two starts before the tick took the first: the second is refused as busy at once.
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 1, 0x1111}, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 2, 0x2222}, 1));
+  b.Drain();
+  VT_EXPECT_EQ(b.results_n, 1);
+  VT_EXPECT_TRUE(b.results[0].sequence == 2 &&
+                 b.results[0].outcome == CommandOutcomeCode::kRefusedBusy);
+  b.Run(1);
+  VT_EXPECT_EQ(b.results_n, 2);
+  VT_EXPECT_TRUE(b.results[1].sequence == 1 &&
+                 b.results[1].outcome == CommandOutcomeCode::kAccepted);
+  // The motion is session 0x1111's: 0x2222's heartbeats do not keep it.
+  for (int i = 0; i < 5 && b.app.state() == AppState::kRunning; ++i) {
+    b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i), 0x2222}, 1));
+    b.Run(1000);
+  }
+  VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
   VT_EXPECT_EQ(b.node.counters().host_timeouts, 1u);
 }
 

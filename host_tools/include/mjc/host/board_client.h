@@ -60,8 +60,15 @@ struct Patience {
   // the first heartbeat the wait sees); 0 = no bound beyond silence.
   std::chrono::milliseconds board{0};
   // Wall time without a single frame from the node, after which it is taken as gone.
-  std::chrono::milliseconds silence{3000};
+  // A real board sends at least its heartbeat every 100 ms; a simulated one starved of
+  // CPU (a slow machine, a frame flood in a slowed virtual machine) was seen silent for
+  // seconds.
+  std::chrono::milliseconds silence{10000};
 };
+
+// What the tools allow a board for answering a start command: like Patience, its own
+// time while it talks, and silence. A real board answers within a millisecond.
+inline constexpr int kStartAnswerMs = 10000;
 
 // A board that talks but sends no heartbeat for this long is taken as silent: the
 // tools read its state and its clock from the heartbeat.
@@ -141,6 +148,9 @@ class BoardClient {
   std::vector<AngleSample> TakeAngles();
 
   std::uint8_t node() const { return node_; }
+  // This client's session: non-zero when it sends heartbeats (the motions it starts are
+  // then supervised by them alone), 0 otherwise.
+  protocol::SessionId session() const { return session_; }
   // True once a send or receive failed on this side (the link is unusable): what tells
   // a failed Command or ReadParam from a board that did not answer.
   bool link_failed() const { return link_failed_; }
@@ -180,6 +190,7 @@ class BoardClient {
   // When the next heartbeat is due (the epoch: at the first poll) and its sequence.
   std::chrono::steady_clock::time_point next_heartbeat_{};
   std::uint8_t heartbeat_sequence_ = 0;
+  protocol::SessionId session_ = 0;
   std::uint8_t sequence_ = 0;
   BoardStatus status_;
   BoardWindow partial_;

@@ -19,6 +19,7 @@ enum class TrialEnd : std::uint8_t {
   kRefused = 3,      // the board refused the start
   kFaulted = 4,      // the board faulted during the trial
   kInterrupted = 5,  // the client's interrupt flag was raised (a signal)
+  kStopped = 6,      // the board went idle before the trial's end (another tool's stop)
 };
 
 struct BoardTrial {

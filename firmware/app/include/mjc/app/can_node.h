@@ -39,11 +39,12 @@ struct CanNodeConfig {
   // timeout, the main loop's poll, the next tick), under the 100 ms goal for lost
   // commands, while a host streaming at 100 Hz may miss four setpoints.
   std::uint16_t stream_timeout_ms = 50;
-  // Host supervision: once a HostHeartbeat has been seen, a motion (calibration sweep,
-  // trial, stream) that hears none for this long is stopped (kHostHeartbeatLost,
-  // latched). Disarmed when the board is at rest and the host quiet, so a tool that
-  // sends no heartbeats is never supervised. [0, 60000] ms, 0 = off; the default
-  // tolerates two lost heartbeats at the host's 10 Hz.
+  // Host supervision: a motion (calibration sweep, trial, stream) started with a
+  // session id is stopped (kHostHeartbeatLost, latched) when that session's heartbeat
+  // stays away this long; other sessions' heartbeats do not count, so another tool
+  // cannot keep alive a motion whose commander died. A motion started without a
+  // session (0: a tool that sends no heartbeats) is not supervised. [0, 60000] ms,
+  // 0 = off; the default tolerates two lost heartbeats at the host's 10 Hz.
   std::uint16_t host_timeout_ms = 300;
   // Largest setpoint speed while streaming, rad/s.
   AngularVelocity stream_rate = AngularVelocity::FromDouble(2.0);
@@ -140,8 +141,12 @@ class CanNode {
   CalibrationStore* store_;
   // Streaming: the tick of the last setpoint (or of the stream's start).
   std::uint32_t last_setpoint_tick_ = 0;
-  // Host supervision: armed by a HostHeartbeat, tick of the last one.
-  bool host_armed_ = false;
+  // Host supervision. A start command awaiting the tick's verdict, and its session;
+  // the session the running motion belongs to (0: unsupervised, or none running) and
+  // the tick of its last heartbeat (or of the motion's start).
+  bool start_pending_ = false;
+  protocol::SessionId start_session_ = 0;
+  protocol::SessionId motion_session_ = 0;
   std::uint32_t last_host_tick_ = 0;
 };
 

@@ -192,9 +192,17 @@ struct FaultEvent {
   std::uint32_t tick = 0;
   BoardState state = BoardState::kFault;
 };
+// A host session: one running tool (mjc trial, calibrate, monitor…), named by a random
+// non-zero number it picks at start. A motion is supervised by the heartbeats of the
+// session that started it, and only those (CanNode): another tool's heartbeats cannot
+// keep a motion going whose commander died. 0 = no session (a tool that sends no
+// heartbeats, e.g. cansend): its motions are not supervised.
+using SessionId = std::uint16_t;
+
 struct Command {
   CommandCode code = CommandCode::kStop;
   std::uint8_t sequence = 0;
+  SessionId session = 0;  // who commands: binds a started motion to its heartbeats
 };
 struct Setpoint {
   Angle position;
@@ -288,6 +296,7 @@ struct Heartbeat {
 };
 struct HostHeartbeat {
   std::uint8_t sequence = 0;
+  SessionId session = 0;
 };
 
 template <class M>
@@ -307,8 +316,9 @@ struct Message;
 MJC_MESSAGE(FaultEvent, kFault, 7, kBoard, MakeSignal("fault_code", &T::fault, 0, 16),
             MakeSignal("tick", &T::tick, 16, 32, "tick"),
             MakeSignal("state", &T::state, 48, 8));
-MJC_MESSAGE(Command, kCommand, 2, kHost, MakeSignal("command", &T::code, 0, 8),
-            MakeSignal("sequence", &T::sequence, 8, 8));
+MJC_MESSAGE(Command, kCommand, 4, kHost, MakeSignal("command", &T::code, 0, 8),
+            MakeSignal("sequence", &T::sequence, 8, 8),
+            MakeSignal("session", &T::session, 16, 16));
 MJC_MESSAGE(Setpoint, kSetpoint, 6, kHost,
             MakeSignal("position_rad", &T::position, 0, 32, "rad"),
             MakeSignal("sequence", &T::sequence, 32, 16));
@@ -372,8 +382,9 @@ MJC_MESSAGE(Heartbeat, kHeartbeat, 8, kBoard, MakeSignal("state", &T::state, 0, 
             MakeSignal("bridge_enabled", &T::bridge_enabled, 9, 1),
             MakeSignal("fault_code", &T::fault, 16, 16),
             MakeSignal("tick", &T::tick, 32, 32, "tick"));
-MJC_MESSAGE(HostHeartbeat, kHostHeartbeat, 1, kHost,
-            MakeSignal("sequence", &T::sequence, 0, 8));
+MJC_MESSAGE(HostHeartbeat, kHostHeartbeat, 3, kHost,
+            MakeSignal("sequence", &T::sequence, 0, 8),
+            MakeSignal("session", &T::session, 8, 16));
 
 #undef MJC_MESSAGE
 
