@@ -197,7 +197,6 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   std::map<int, std::function<void()>> handlers_;
   std::vector<int> active_stack_;
   bool primask_ = false;
-  bool in_service_ = false;
   int resets_ = 0;
   std::optional<ResetCause> reset_pending_;
   std::function<void(ResetCause)> reset_handler_;
