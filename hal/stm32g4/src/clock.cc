@@ -38,9 +38,9 @@ void ClearBits(Address a, std::uint32_t bits) { Write32(a, Read32(a) & ~bits); }
 ClockResult ConfigureClocks() {
   EnableCycleCounter();
   const Address rcc_cr = rcc::kBase + rcc::kCr;
-  const Address cfgr = rcc::kBase + rcc::kCfgr;
+  constexpr Address cfgr = rcc::kBase + rcc::kCfgr;
   // A step that fails leaves SYSCLK on HSI16 and AHB back at /1 (16 MHz).
-  const auto fail = [cfgr](ClockResult result) {
+  const auto fail = [](ClockResult result) {
     Write32(cfgr, rcc::cfgr::kHpre.With(Read32(cfgr), kHpreDiv1));
     return result;
   };
