@@ -151,15 +151,15 @@ void RecordBus(const Options& o) {
     return true;
   };
   // SIGINT/SIGTERM end the recording cleanly: what the socket already holds is still
-  // written (for at most a second), the file flushed and the counts printed, so a
-  // stopped logger loses nothing it received.
+  // written, the file flushed and the counts printed, so a stopped logger loses nothing
+  // it received. The drain ends when the socket is empty (it empties faster than any
+  // bus fills it), not after a time: on a slow machine writing the backlog takes long.
   const std::atomic<bool>& stop = StopOnSignals();
   while (!stop && !done() &&
          (o.seconds == 0 || std::chrono::steady_clock::now() < deadline)) {
     record(100);
   }
-  const auto drain_until = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-  while (stop && !done() && std::chrono::steady_clock::now() < drain_until && record(0)) {
+  while (stop && !done() && record(0)) {
   }
   std::fprintf(stderr, "mjc log: %ld frames, %llu dropped by the kernel\n", written,
                static_cast<unsigned long long>(link->stats().rx_dropped));

@@ -15,6 +15,7 @@ void AddReport(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("report", "Tables and figure of a trial run (its windows.csv)");
   static std::string dir, protocol_name;
+  static bool figure = true;
   cmd->add_option("dir", dir, "The output folder of mjc trial")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -22,6 +23,7 @@ void AddReport(CLI::App& app) {
                   "repeatability or amplitude (default: amplitude when the trials' "
                   "amplitudes differ, else repeatability)")
       ->check(CLI::IsMember({"repeatability", "amplitude"}));
+  cmd->add_flag("!--no-figure", figure, "Tables only (no gnuplot)");
   cmd->callback([] {
     std::string why;
     const auto trials = host::ReadWindowsCsv(dir, &why);
@@ -38,6 +40,7 @@ void AddReport(CLI::App& app) {
     host::WriteFile(std::filesystem::path(dir) / "report.md",
                     "# Trial report\n\n" + tables);
     std::printf("report: %s/report.md\n", dir.c_str());
+    if (!figure) return;
     if (!host::PlotTrials(dir, repeatability, &why)) {
       throw Failure("no figure: " + why + " (report.md is saved)");
     }

@@ -47,7 +47,7 @@ void AddTrial(CLI::App& app) {
   static int node = 1, trials = 5, reps = 5;
   static double amplitude_deg = 25, frequency_hz = 0.5, rest_s = 1.5;
   static std::vector<double> amplitudes = {6, 8, 11, 15, 20, 25};
-  static bool pause = false;
+  static bool pause = false, figure = true;
   AddIfaceOption(cmd, &iface);
   AddNodeOption(cmd, &node);
   cmd->add_option("--protocol", protocol_name, "repeatability or amplitude")
@@ -73,6 +73,7 @@ void AddTrial(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--pause", pause, "Wait for Enter between trials (re-donning)");
   cmd->add_option("--out", out_dir, "Output folder")->capture_default_str();
+  cmd->add_flag("!--no-figure", figure, "Tables and windows.csv only (no gnuplot)");
   cmd->callback([] {
     // The output folder first: an unwritable one is found before the trials run.
     std::filesystem::create_directories(out_dir);
@@ -156,6 +157,7 @@ void AddTrial(CLI::App& app) {
     std::fputs(host::TrialTables(runs, repeatability).c_str(), stdout);
     std::printf("windows: %s/windows.csv\n", out_dir.c_str());
     std::string why;
+    if (!figure) return;
     if (!host::PlotTrials(out_dir, repeatability, &why)) {
       throw Failure("no figure: " + why + " (the tables and windows.csv are saved)");
     }

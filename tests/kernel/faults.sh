@@ -37,7 +37,7 @@ dumper=$!
   >"$work/monitor.out" 2>"$work/monitor.err" &
 monitor=$!
 "$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 20 \
-  --frequency-hz 0.5 --rest-s 0.2 --out "$work/trial" >"$work/trial.out" 2>"$work/trial.err" &
+  --frequency-hz 0.5 --rest-s 0.2 --out "$work/trial" --no-figure >"$work/trial.out" 2>"$work/trial.err" &
 trial=$!
 wait_receivers $((base + 3))  # candump, monitor, trial
 check "the trial runs" wait_for "$work/trial.err" "repetition 1/20"
@@ -64,7 +64,7 @@ check "mjc clear says what it cleared" grep -q "node 1: fault 303 (CAN bus-off) 
 "$mjc" clear --iface vcan0 --node 1 >"$work/clear2.out" 2>&1
 check "a second clear finds nothing latched" grep -q "node 1: no fault latched" "$work/clear2.out"
 "$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 3 \
-  --frequency-hz 2 --rest-s 0.2 --out "$work/after" >"$work/after.out" 2>"$work/after.err"
+  --frequency-hz 2 --rest-s 0.2 --out "$work/after" --no-figure >"$work/after.out" 2>"$work/after.err"
 status=$?
 check "the next trial completes (exit $status)" test "$status" -eq 0
 "$mjc" stop --iface vcan0 --node 1 >"$work/stop.out" 2>&1

@@ -31,7 +31,7 @@ gen1=$!
 cangen vcan0 -g 0 -I 202 -L 8 -D i -n "$frames" 2>"$work/gen2.err" &  # node 2's angles
 gen2=$!
 "$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 3 \
-  --frequency-hz 2 --rest-s 0.2 --out "$work/trial" >"$work/trial.out" 2>"$work/trial.err" ||
+  --frequency-hz 2 --rest-s 0.2 --out "$work/trial" --no-figure >"$work/trial.out" 2>"$work/trial.err" ||
   fail "mjc trial under the flood"
 wait "$gen1" "$gen2"
 end=$(date +%s.%N)

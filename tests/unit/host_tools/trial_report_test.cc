@@ -123,4 +123,24 @@ TEST_F(WindowsCsv, AnUnwritableFolderThrowsNamingTheFile) {
   }
 }
 
+// The figure, drawn by gnuplot on the host (the kernel-layer scripts draw none: a
+// figure needs no CAN, and gnuplot under emulation took 14 s).
+TEST_F(WindowsCsv, TheFigureIsAPngOfEveryTrial) {
+  const std::vector<TrialWindows> trials = {
+      {15.0, 5, {Flexion(1, 40, true), Flexion(2, 45, true), Flexion(3, 50, true)}},
+      {25.0, 5, {Flexion(1, 42, true), Flexion(2, 47, true), Flexion(3, 52, true)}}};
+  std::filesystem::create_directories(dir_);
+  WriteWindowsCsv(trials, dir_);
+  std::string why;
+  for (const bool repeatability : {true, false}) {
+    std::filesystem::remove(dir_ / "eta.png");
+    ASSERT_TRUE(PlotTrials(dir_, repeatability, &why)) << why;
+    std::ifstream png(dir_ / "eta.png", std::ios::binary);
+    char magic[8] = {};
+    png.read(magic, sizeof magic);
+    EXPECT_EQ(std::string(magic, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+    EXPECT_GT(std::filesystem::file_size(dir_ / "eta.png"), 1000u);
+  }
+}
+
 }  // namespace
