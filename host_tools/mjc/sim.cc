@@ -9,11 +9,13 @@
 #include <csignal>
 #include <cstdio>
 #include <numeric>
+#include <random>
 #include <thread>
 
 #include "commands.h"
 #include "hal/sim/sim_flash.h"
 #include "mjc/app/can_node.h"
+#include "mjc/build_id.h"
 #include "mjc/host/can_link.h"
 #include "mjc/plant/params.h"
 #include "mjc/sim/scenarios.h"
@@ -87,6 +89,12 @@ void AddSim(CLI::App& app) {
     }
     app::CanNodeConfig node_config;
     node_config.node = static_cast<std::uint8_t>(node);
+    // Who this board is: this build, just powered on, and an identity of its own
+    // drawn at random (a board's comes from its chip's unique id).
+    node_config.identity.build = build::kCommit;
+    node_config.identity.dirty = build::kDirty;
+    node_config.identity.reset_cause = protocol::ResetCause::kPowerOn;
+    node_config.identity.instance = static_cast<std::uint16_t>(std::random_device{}());
     // A host's heartbeats come every 100 ms of wall time, `speed` times as much board
     // time: the board's supervision timeout scales with it, so it still means 300 ms of
     // wall time, and is off at speed 0, where wall time means nothing to the board.

@@ -47,6 +47,7 @@ BusLoad ComputeBusLoad(const app::CanNodeConfig& r, int boards, const BusTiming&
   add(TelemetryEnergy{}, r.energy_hz);
   add(TelemetryControl{}, r.control_hz);
   add(Heartbeat{}, r.heartbeat_hz);
+  add(BoardInfo{}, r.info_hz);
   add(WindowHeader{}, kWindowsHz);
   add(WindowEnergy{}, kWindowsHz);
   add(WindowWork{}, kWindowsHz);

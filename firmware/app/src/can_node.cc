@@ -386,6 +386,13 @@ void CanNode::HandleParam(ParamId id, bool write, std::int32_t value) {
     default:
       break;
   }
+  if (id == ParamId::kBuildId) {
+    ParamValue reply;
+    reply.id = id;
+    reply.status = write ? ParamStatus::kReadOnly : ParamStatus::kOk;
+    reply.value = static_cast<std::int32_t>(config_.identity.build);
+    return Send(reply);
+  }
   if (own != nullptr) {
     ParamValue reply;
     reply.id = id;
@@ -564,6 +571,7 @@ void CanNode::Poll() {
     Send(TelemetryControl{t.setpoint, t.duty, t.segment,
                           static_cast<BoardState>(last.state)});
   }
+  if (Due(config_.info_hz, &next_info_)) Send(config_.identity);
   if (Due(config_.heartbeat_hz, &next_heartbeat_)) {
     Heartbeat h;
     h.state = static_cast<BoardState>(last.state);

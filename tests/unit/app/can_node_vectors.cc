@@ -403,4 +403,53 @@ MJC_VECTOR_TEST(CanNode, BusOffStopsTheMotorInTheNextTickAndIsCounted) {
   VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
 }
 
+MJC_VECTOR_TEST(CanNode, TellsWhoItIsAtStartAndOnceASecond) {
+  static JointApp app{ControlConfig{}};
+  CanNodeConfig config;
+  config.identity.build = 0x1c37bb4au;
+  config.identity.dirty = true;
+  config.identity.reset_cause = ResetCause::kWatchdog;
+  config.identity.instance = 0xBEEF;
+  static CanNode node(&app, config);
+  QuietIo io;
+  int infos = 0;
+  BoardInfo last;
+  const auto run = [&](int ticks) {
+    for (int i = 0; i < ticks; ++i) {
+      app.ISR_Tick(io);
+      node.Poll();
+      CanFrame f;
+      while (node.PopTx(&f)) {
+        if (FunctionOf(f.id) == static_cast<std::uint8_t>(Function::kBoardInfo) &&
+            Decode(f, &last) == DecodeError::kOk) {
+          ++infos;
+        }
+      }
+    }
+  };
+  run(1);
+  VT_EXPECT_EQ(infos, 1);  // at start
+  VT_EXPECT_TRUE(last.build == 0x1c37bb4au && last.dirty &&
+                 last.image == ImageKind::kApplication &&
+                 last.reset_cause == ResetCause::kWatchdog && last.instance == 0xBEEF);
+  run(10000);
+  VT_EXPECT_EQ(infos, 2);  // and a second later
+  // The build is a read-only parameter too.
+  node.HandleFrame(Encode(ParamRead{ParamId::kBuildId}, 1));
+  CanFrame f;
+  ParamValue v;
+  bool answered = false;
+  while (node.PopTx(&f)) {
+    answered = answered || Decode(f, &v) == DecodeError::kOk;
+  }
+  VT_EXPECT_TRUE(answered && v.status == ParamStatus::kOk &&
+                 static_cast<std::uint32_t>(v.value) == 0x1c37bb4au);
+  node.HandleFrame(Encode(ParamWrite{ParamId::kBuildId, 1}, 1));
+  answered = false;
+  while (node.PopTx(&f)) {
+    answered = answered || Decode(f, &v) == DecodeError::kOk;
+  }
+  VT_EXPECT_TRUE(answered && v.status == ParamStatus::kReadOnly);
+}
+
 }  // namespace

@@ -39,14 +39,14 @@ TEST(BusLoad, DefaultRatesFitTheBudgetOnFdNotOnClassical) {
 TEST(BusLoad, HighestClassicalTelemetryRateByHand) {
   // Classical CAN at 1 Mbit/s, 8 boards, worst-case stuffing: an 8-byte frame is
   // 135 bits = 135 µs, the 3-byte host heartbeat 47 + 24 + ⌊57/4⌋ = 85 µs. Besides the
-  // angles, each board sends torque, power, energy, control and heartbeat at 10 Hz and
-  // five 8-byte window frames at 4 windows/s, 70 frames/s: 70 × 135 µs = 9.45 ms/s; the
-  // host's heartbeat to it adds 10 × 85 µs = 0.85 ms/s. Eight boards: 82.4 ms/s, a load
-  // of 0.0824. The 50 % budget leaves 0.4176 for angle frames of 8 × 135 µs each:
-  // 0.4176 / 1.08e-3 = 386.667 Hz.
+  // angles, each board sends torque, power, energy, control and heartbeat at 10 Hz, its
+  // BoardInfo at 1 Hz and five 8-byte window frames at 4 windows/s, 71 frames/s:
+  // 71 × 135 µs = 9.585 ms/s; the host's heartbeat to it adds 10 × 85 µs = 0.85 ms/s.
+  // Eight boards: 83.48 ms/s, a load of 0.08348. The 50 % budget leaves 0.41652 for
+  // angle frames of 8 × 135 µs each: 0.41652 / 1.08e-3 = 385.667 Hz.
   const double hz =
       host::MaxTelemetryHz(app::CanNodeConfig{}, 8, BusTiming{false, 1e6, 1e6}, 0.5);
-  EXPECT_NEAR(hz, 0.4176 / 1.08e-3, 1e-9);
+  EXPECT_NEAR(hz, 0.41652 / 1.08e-3, 1e-9);
 }
 
 }  // namespace

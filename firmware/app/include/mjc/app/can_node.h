@@ -48,6 +48,10 @@ struct CanNodeConfig {
   std::uint16_t host_timeout_ms = 300;
   // Largest setpoint speed while streaming, rad/s.
   AngularVelocity stream_rate = AngularVelocity::FromDouble(2.0);
+  // Who the board is (BoardInfo): sent at the first poll and then at info_hz. The board
+  // fills in its build, its reset cause and its instance.
+  protocol::BoardInfo identity;
+  std::uint16_t info_hz = 1;
 };
 
 struct CanNodeCounters {
@@ -136,7 +140,7 @@ class CanNode {
   std::uint32_t now_ms_ = 0;
   std::uint32_t ms_remainder_ = 0;  // tick·1000 not yet a whole millisecond, < tick rate
   std::uint32_t next_angles_ = 0, next_torque_ = 0, next_power_ = 0, next_energy_ = 0,
-                next_control_ = 0, next_heartbeat_ = 0;
+                next_control_ = 0, next_heartbeat_ = 0, next_info_ = 0;
   protocol::IsoTpReceiver isotp_;
   CalibrationStore* store_;
   // Streaming: the tick of the last setpoint (or of the stream's start).

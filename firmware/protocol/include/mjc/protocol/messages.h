@@ -76,6 +76,7 @@ enum class Function : std::uint8_t {
   kTelemetryControl = 0x24,
   kHeartbeat = 0x30,
   kHostHeartbeat = 0x31,
+  kBoardInfo = 0x32,
   kIsoTpToBoard = 0x3E,    // ISO-TP channel host → board (calibration records)
   kIsoTpFromBoard = 0x3F,  // ISO-TP channel board → host
 };
@@ -101,6 +102,23 @@ enum class CommandCode : std::uint8_t {
 constexpr bool ValidEnumValue(CommandCode c) {
   return static_cast<std::uint8_t>(c) >= 1 && static_cast<std::uint8_t>(c) <= 5;
 }
+
+// Which image answers: the application, or the bootloader that stays when there is no
+// valid application or the host asked it to.
+enum class ImageKind : std::uint8_t { kApplication = 0, kBootloader = 1 };
+constexpr bool ValidEnumValue(ImageKind k) { return static_cast<std::uint8_t>(k) <= 1; }
+
+// Why the board last started (its reset controller's flags; the board maps its chip's
+// flags to these numbers).
+enum class ResetCause : std::uint8_t {
+  kUnknown = 0,
+  kPowerOn = 1,
+  kPin = 2,       // the reset line (a host's reset line, or the button)
+  kSoftware = 3,  // the firmware asked for it (e.g. to enter the bootloader)
+  kWatchdog = 4,  // the independent watchdog: the main loop stopped making progress
+  kOther = 5,
+};
+constexpr bool ValidEnumValue(ResetCause c) { return static_cast<std::uint8_t>(c) <= 5; }
 
 // A command's outcome (equal to mjc::app::CommandResult, checked there).
 enum class CommandOutcomeCode : std::uint8_t {
@@ -138,6 +156,8 @@ enum class ParamId : std::uint16_t {
   kCalibrationStiffness = 0x0403,  // 2kr_j², Q24 N·m/rad
   kCalibrationJointZero = 0x0404,  // joint encoder zero count
   kCalibrated = 0x0405,            // 1 once a calibration was accepted
+  // The running image, read-only.
+  kBuildId = 0x0500,  // BoardInfo::build as a signed 32-bit value
 };
 constexpr bool ValidEnumValue(ParamId id) {
   switch (id) {
@@ -161,6 +181,7 @@ constexpr bool ValidEnumValue(ParamId id) {
     case ParamId::kCalibrationStiffness:
     case ParamId::kCalibrationJointZero:
     case ParamId::kCalibrated:
+    case ParamId::kBuildId:
       return true;
   }
   return false;
@@ -294,6 +315,17 @@ struct Heartbeat {
   Fault fault = Fault::kNone;
   std::uint32_t tick = 0;
 };
+// Who a board is, sent at start-up and then once a second: the image it runs, the build
+// that made it, why it last started, and an identity of the physical board (from the
+// chip's unique id; a simulated board draws one), so that two boards answering with one
+// node id are told apart.
+struct BoardInfo {
+  std::uint32_t build = 0;  // the build's commit: the first 8 hex digits of its hash
+  bool dirty = false;       // built from a tree with uncommitted changes
+  ImageKind image = ImageKind::kApplication;
+  ResetCause reset_cause = ResetCause::kUnknown;
+  std::uint16_t instance = 0;  // the physical board (hash of its unique id)
+};
 struct HostHeartbeat {
   std::uint8_t sequence = 0;
   SessionId session = 0;
@@ -382,6 +414,10 @@ MJC_MESSAGE(Heartbeat, kHeartbeat, 8, kBoard, MakeSignal("state", &T::state, 0, 
             MakeSignal("bridge_enabled", &T::bridge_enabled, 9, 1),
             MakeSignal("fault_code", &T::fault, 16, 16),
             MakeSignal("tick", &T::tick, 32, 32, "tick"));
+MJC_MESSAGE(BoardInfo, kBoardInfo, 8, kBoard, MakeSignal("build", &T::build, 0, 32),
+            MakeSignal("dirty", &T::dirty, 32, 1), MakeSignal("image", &T::image, 33, 3),
+            MakeSignal("reset_cause", &T::reset_cause, 36, 4),
+            MakeSignal("instance", &T::instance, 40, 16));
 MJC_MESSAGE(HostHeartbeat, kHostHeartbeat, 3, kHost,
             MakeSignal("sequence", &T::sequence, 0, 8),
             MakeSignal("session", &T::session, 8, 16));
@@ -393,7 +429,7 @@ using AllMessages =
     std::tuple<FaultEvent, Command, Setpoint, CommandResult, TrialConfig, SweepConfig,
                WindowHeader, WindowEnergy, WindowWork, WindowPeaks, WindowTicks,
                ParamWrite, ParamRead, ParamValue, TelemetryAngles, TelemetryTorque,
-               TelemetryPower, TelemetryEnergy, TelemetryControl, Heartbeat,
+               TelemetryPower, TelemetryEnergy, TelemetryControl, Heartbeat, BoardInfo,
                HostHeartbeat>;
 
 namespace detail {
