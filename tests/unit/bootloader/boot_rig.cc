@@ -11,7 +11,9 @@ std::vector<std::uint8_t> MakeImage(std::size_t bytes, std::uint32_t seed) {
   std::mt19937 rng(seed);
   for (auto& b : image) b = static_cast<std::uint8_t>(rng());
   protocol::PutLe(&image[0], 0x10000800u, 4);  // the interrupt stack's top in CCM
-  protocol::PutLe(&image[4], kG474Layout.ImageAddress() + 0x1D9u, 4);
+  // A Thumb reset handler inside the image.
+  const std::uint32_t entry = bytes > 0x1DA ? 0x1D9u : 9u;
+  protocol::PutLe(&image[4], kG474Layout.ImageAddress() + entry, 4);
   return image;
 }
 
