@@ -303,8 +303,12 @@ void Bootloader::Stay(StayReason reason) {
 std::uint16_t Bootloader::progress_permille() const {
   if (state_ == BootState::kCommitted) return 1000;
   if (state_ != BootState::kReceiving || incoming_.length == 0) return 0;
-  return static_cast<std::uint16_t>(std::uint64_t{next_offset_} * 1000u /
-                                    incoming_.length);
+  // 32-bit arithmetic (no 64-bit division in the image): offset × 1000 fits while the
+  // region is below 4 MB (the G474's is 240 KB, the header check bounds the length).
+  if (config_.layout.RegionBytes() > 0xFFFFFFFFu / 1000u) {
+    return static_cast<std::uint16_t>(next_offset_ / (incoming_.length / 1000u + 1u));
+  }
+  return static_cast<std::uint16_t>(next_offset_ * 1000u / incoming_.length);
 }
 
 void Bootloader::Reply(BootRequest request, BootError error, std::uint8_t sequence) {

@@ -90,8 +90,9 @@ TEST(G474Platform, HandsOverInTheResetStateAndTheApplicationStartsOnIt) {
   const auto at_reset = Snapshot();
   // The bootloader's run: its clocks and pins, FDCAN up, interrupts masked.
   stm32g4::DisableInterrupts();
+  boot::g474::HoldBridgeOff();
   ASSERT_EQ(stm32g4::ConfigureClocks(), stm32g4::ClockResult::kOk);
-  boot::g474::EnableBootloaderPeripherals();
+  boot::g474::EnableCanPeripherals();
   stm32g4::Stm32g4Fdcan can;
   ASSERT_EQ(can.Init(Filters()), stm32g4::FdcanResult::kOk);
   EXPECT_EQ(chip.fdcan1().nominal_bitrate(), 1e6);
@@ -112,8 +113,11 @@ TEST(G474Platform, HandsOverInTheResetStateAndTheApplicationStartsOnIt) {
 TEST(G474Platform, TheBridgeEnableIsDrivenLowAndTim1NeverRuns) {
   VirtualChip chip;
   Bound bound(&chip);
-  boot::g474::EnableBootloaderPeripherals();
+  boot::g474::HoldBridgeOff();
   EXPECT_EQ(chip.gpio('B').mode(10), g474model::PinMode::kOutput);
+  EXPECT_EQ(chip.gpio('B').Level(10), false);
+  EXPECT_EQ(chip.gpio('A').mode(11), g474model::PinMode::kAnalog) << "nothing else yet";
+  boot::g474::EnableCanPeripherals();
   EXPECT_FALSE(chip.gpio('B').odr(10));
   EXPECT_EQ(chip.gpio('B').Level(10), false);
   EXPECT_EQ(chip.gpio('A').mode(11), g474model::PinMode::kAlternate);

@@ -18,14 +18,13 @@ using stm32g4::Read32;
 using stm32g4::Write32;
 namespace rcc = stm32g4::rcc;
 
-constexpr stm32g4::Pin kBridgeEnable{stm32g4::Port::kB, 10};
-constexpr stm32g4::PinConfig kPins[] = {
-    // First: the bridge's enable low from the moment it is an output (pins.h of the
-    // joint board: the same pin and level).
-    {.pin = kBridgeEnable,
-     .mode = stm32g4::PinMode::kOutput,
-     .pull = stm32g4::Pull::kDown,
-     .initial_high = false},
+// The bridge's enable low from the moment it is an output (pins.h of the joint board:
+// the same pin and level).
+constexpr stm32g4::PinConfig kBridgeEnable = {.pin = {stm32g4::Port::kB, 10},
+                                              .mode = stm32g4::PinMode::kOutput,
+                                              .pull = stm32g4::Pull::kDown,
+                                              .initial_high = false};
+constexpr stm32g4::PinConfig kCanPins[] = {
     {.pin = {stm32g4::Port::kA, 11},
      .mode = stm32g4::PinMode::kAlternate,
      .alternate = 9,
@@ -77,11 +76,18 @@ ResetFlags PeekResetFlags() {
   return r;
 }
 
-void EnableBootloaderPeripherals() {
+void HoldBridgeOff() {
   const Address ahb2enr = rcc::kBase + rcc::kAhb2enr;
-  SetBits(ahb2enr, rcc::ahb2enr::kGpioaen.Bit() | rcc::ahb2enr::kGpioben.Bit());
+  SetBits(ahb2enr, rcc::ahb2enr::kGpioben.Bit());
   (void)Read32(ahb2enr);  // usable once the enable has reached it (RM0440 §7.2.17)
-  for (const stm32g4::PinConfig& pin : kPins) stm32g4::ConfigurePin(pin);
+  stm32g4::ConfigurePin(kBridgeEnable);
+}
+
+void EnableCanPeripherals() {
+  const Address ahb2enr = rcc::kBase + rcc::kAhb2enr;
+  SetBits(ahb2enr, rcc::ahb2enr::kGpioaen.Bit());
+  (void)Read32(ahb2enr);
+  for (const stm32g4::PinConfig& pin : kCanPins) stm32g4::ConfigurePin(pin);
   // FDCAN's kernel clock is chosen before its register clock starts: PLLQ (01).
   const Address ccipr = rcc::kBase + rcc::kCcipr;
   Write32(ccipr, rcc::ccipr::kFdcansel.With(Read32(ccipr), 0b01));
@@ -110,11 +116,13 @@ std::uint32_t MsClock::Now() {
     last_ = now;
     return 0;
   }
-  // Whole milliseconds carried, the rest kept: no drift over any run.
-  const std::uint64_t cycles = std::uint64_t{now - last_} + remainder_;
+  // Whole milliseconds carried, the rest kept: no drift over any run. 32-bit
+  // arithmetic (no 64-bit division in the image): the elapsed cycles plus a remainder
+  // below one millisecond's stay below 2^32 while Now() runs once per wrap less 1 ms.
+  const std::uint32_t cycles = (now - last_) + remainder_;
   last_ = now;
-  ms_ += static_cast<std::uint32_t>(cycles / cycles_per_ms_);
-  remainder_ = static_cast<std::uint32_t>(cycles % cycles_per_ms_);
+  ms_ += cycles / cycles_per_ms_;
+  remainder_ = cycles % cycles_per_ms_;
   return ms_;
 }
 

@@ -36,12 +36,15 @@ struct ResetFlags {
 };
 ResetFlags PeekResetFlags();
 
-// The bridge's enable line (PB10) an output driven low — before anything else — then
-// FDCAN1's pins (PA11 RX, PA12 TX, AF9) and clocks (kernel clock PLLQ, 85 MHz).
-// Nothing else is clocked: TIM1 never runs, its pins stay in their reset state (analog)
-// and the board's pull-downs hold the gate driver's inputs, so the bootloader cannot
-// drive the motor.
-void EnableBootloaderPeripherals();
+// The bridge's enable line (PB10, GPIOB's clock on) an output driven low: the
+// bootloader's first act. The board's pull-down holds it low before (reset) and after
+// (the hand-over returns PB10 to its reset state). TIM1 is never clocked and its pins
+// stay in their reset state (analog), so the bootloader cannot drive the motor.
+void HoldBridgeOff();
+
+// FDCAN1's pins (PA11 RX, PA12 TX, AF9) and clocks (kernel clock PLLQ, 85 MHz, once
+// the clock tree runs). Nothing else is clocked.
+void EnableCanPeripherals();
 
 // The physical board: a hash of the chip's 96-bit unique id (RM0440 §48.1, at
 // 0x1FFF7590): CRC-32 of its 12 bytes, the two halves XORed. The application reports
@@ -49,9 +52,9 @@ void EnableBootloaderPeripherals();
 std::uint16_t BoardInstance();
 
 // Milliseconds since the first call, from the DWT cycle counter at `cycles_per_ms`; exact
-// across the counter's wrap as long as Now() is called at least once per wrap (25 s at
-// 170 MHz; the bootloader's loop calls it every few µs, its longest flash work lasts
-// ~60 ms).
+// across the counter's wrap as long as Now() is called at least once per wrap less a
+// millisecond (25 s at 170 MHz; the bootloader's loop calls it every few µs, its
+// longest flash work lasts ~60 ms).
 class MsClock {
  public:
   explicit MsClock(std::uint32_t cycles_per_ms) : cycles_per_ms_(cycles_per_ms) {}
