@@ -82,15 +82,16 @@ class Rig {
   // serving the bus at `until` (or the chip reset).
   std::optional<g474::Exit> Run(Picoseconds until) {
     chip_.SetTimeLimit(until);
+    std::optional<g474::Exit> exit;
     try {
       bootloader_.emplace(&handoff);
-      return bootloader_->Run();
+      exit = bootloader_->Run();
     } catch (const g474model::TimeLimitReached&) {
-      return std::nullopt;
     } catch (const g474model::ChipReset& reset) {
       resets.push_back(reset.cause);
-      return std::nullopt;
     }
+    chip_.SetTimeLimit(g474model::kNever);  // the test reads registers afterwards
+    return exit;
   }
 
   // Frames the board sent of type M (from node `node`), with their times.
@@ -139,6 +140,8 @@ TEST(G474Bootloader, WithoutAnImageItStaysAndReportsOnTheBus) {
   EXPECT_NEAR(static_cast<double>(period) / kMs, 100.0, 0.1);
   EXPECT_EQ(rig.chip().fdcan1().nominal_bitrate(), 1e6);
   EXPECT_EQ(rig.chip().gpio('B').Level(10), false) << "the bridge's enable";
+  EXPECT_EQ(boot::g474::PeekResetFlags().cause, protocol::ResetCause::kUnknown)
+      << "staying, it cleared this reset's flags";
   EXPECT_TRUE(rig.chip().violations().empty()) << Violations(rig.chip());
 }
 
@@ -156,6 +159,8 @@ TEST(G474Bootloader, AValidImageStartsAfterTheHoldWindowInTheResetState) {
   EXPECT_EQ(status[0].first.state, BootState::kHoldWindow);
   const double window_ms = static_cast<double>(rig.chip().now() - status[0].second) / kMs;
   EXPECT_NEAR(window_ms, 200.0, 0.5);
+  EXPECT_EQ(boot::g474::PeekResetFlags().cause, protocol::ResetCause::kPowerOn)
+      << "starting the application, it left the flags to it";
   g474::ReleasePeripherals();
   EXPECT_EQ(rig.chip().rcc().sysclk_hz(), 16e6);
   EXPECT_TRUE(rig.chip().violations().empty()) << Violations(rig.chip());

@@ -145,6 +145,9 @@ TEST(G474Platform, ResetFlagsAreReadNotCleared) {
   EXPECT_TRUE(boot::g474::PeekResetFlags().software) << "still there for the application";
   EXPECT_EQ(stm32g4::TakeResetCause(), stm32g4::ResetCause::kSoftware);
   EXPECT_FALSE(boot::g474::PeekResetFlags().software);
+  stm32g4::RequestSystemReset();
+  boot::g474::ClearResetFlags();
+  EXPECT_EQ(boot::g474::PeekResetFlags().cause, protocol::ResetCause::kUnknown);
 }
 
 TEST(G474Platform, InstanceIsTheUniqueIdsCrcFolded) {

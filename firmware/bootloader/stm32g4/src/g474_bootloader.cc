@@ -70,8 +70,15 @@ Exit G474Bootloader::Run() {
   Bootloader& boot = boot_.emplace(config, &flash_, can_ok ? &can_ : nullptr, handoff_);
   MsClock clock(clock_ok ? stm32g4::kSysclkHz / 1000 : 16'000);
   BootAction action = boot.Start(clock.Now(), reset.software);
+  bool flags_cleared = false;
   while (action == BootAction::kNone) {
     stm32g4::RefreshWatchdog();
+    // Staying: the reset flags read above are this run's; the application reads its own
+    // reset's, so they are cleared now rather than left to mix with the next reset's.
+    if (!flags_cleared && boot.state() != protocol::BootState::kHoldWindow) {
+      ClearResetFlags();
+      flags_cleared = true;
+    }
     if (can_ok) {
       can_.ISR_Line0();  // polled: the RX FIFO into the port's queue
       can_.ISR_Line1();  // bus-off recovery

@@ -76,6 +76,11 @@ ResetFlags PeekResetFlags() {
   return r;
 }
 
+void ClearResetFlags() {
+  const Address csr = rcc::kBase + rcc::kCsr;
+  Write32(csr, Read32(csr) | rcc::csr::kRmvf.Bit());
+}
+
 void HoldBridgeOff() {
   const Address ahb2enr = rcc::kBase + rcc::kAhb2enr;
   SetBits(ahb2enr, rcc::ahb2enr::kGpioben.Bit());

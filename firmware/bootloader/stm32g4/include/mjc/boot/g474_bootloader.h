@@ -2,14 +2,14 @@
 // hands over or resets: what firmware/boards/g474_bootloader's main() runs, and what
 // the host's tests run against the chip's register models.
 //
-// In order: the bridge's enable low; the reset flags read (not cleared); the clock
-// tree (170 MHz; FDCAN from PLLQ, 85 MHz); the watchdog (100 ms); the flash driver with
-// only the application region writable; the board's identity (node id, hardware
-// revision) from its pages, or node 1 / revision 1 without a record; FDCAN1 with three
-// filters (BootHold, BootCommand and the bootloader's ISO-TP channel, to this node).
-// Then the logic (mjc/boot/bootloader.h) decides, and the loop serves the bus: the CAN
-// controller polled (PRIMASK stays set: no interrupt is taken), the watchdog refreshed
-// every pass and between the blocks of long flash work.
+// In order: the bridge's enable low; the reset flags read (cleared only once it stays);
+// the clock tree (170 MHz; FDCAN from PLLQ, 85 MHz); the watchdog (100 ms); the flash
+// driver with only the application region writable; the board's identity (node id,
+// hardware revision) from its pages, or node 1 / revision 1 without a record; FDCAN1 with
+// three filters (BootHold, BootCommand and the bootloader's ISO-TP channel, to this
+// node). Then the logic (mjc/boot/bootloader.h) decides, and the loop serves the bus: the
+// CAN controller polled (PRIMASK stays set: no interrupt is taken), the watchdog
+// refreshed every pass and between the blocks of long flash work.
 //
 // Without a working clock tree (no crystal) the bootloader does not join the bus — its
 // bit timing would be wrong — and starts a valid image without a hold window.

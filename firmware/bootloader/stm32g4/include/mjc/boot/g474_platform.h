@@ -28,13 +28,16 @@
 
 namespace mjc::boot::g474 {
 
-// The last reset, from RCC_CSR's flags, which stay set (RMVF is the application's: it
-// reports its own reset). A power-on clears SFTRSTF.
+// The last reset, from RCC_CSR's flags, which stay set for the application (it reports
+// its own reset). A power-on clears SFTRSTF.
 struct ResetFlags {
   bool software = false;  // SFTRSTF: a software reset (AIRCR.SYSRESETREQ)
   protocol::ResetCause cause = protocol::ResetCause::kUnknown;
 };
 ResetFlags PeekResetFlags();
+// Clears them (RCC_CSR.RMVF): once the bootloader stays, the application will not run
+// before the next reset, whose own flags must not be mixed with these.
+void ClearResetFlags();
 
 // The bridge's enable line (PB10, GPIOB's clock on) an output driven low: the
 // bootloader's first act. The board's pull-down holds it low before (reset) and after
