@@ -1,14 +1,11 @@
 #include "mjc/boot/g474_platform.h"
 
-#include <array>
-
 #include "hal/stm32g4/clock.h"
 #include "hal/stm32g4/gpio.h"
 #include "hal/stm32g4/mmio.h"
 #include "hal/stm32g4/poll.h"
 #include "hal/stm32g4/regs/cortex_m4.h"
 #include "hal/stm32g4/regs/rcc.h"
-#include "mjc/protocol/crc32.h"
 
 namespace mjc::boot::g474 {
 namespace {
@@ -102,16 +99,9 @@ void EnableCanPeripherals() {
 }
 
 std::uint16_t BoardInstance() {
-  std::uint32_t state = protocol::kCrc32Init;
-  for (Address a = kUid; a < kUid + 12; a += 4) {
-    const std::uint32_t w = Read32(a);
-    const std::array<std::uint8_t, 4> b = {
-        static_cast<std::uint8_t>(w), static_cast<std::uint8_t>(w >> 8),
-        static_cast<std::uint8_t>(w >> 16), static_cast<std::uint8_t>(w >> 24)};
-    state = protocol::Crc32Update(state, b);
-  }
-  const std::uint32_t crc = protocol::Crc32Final(state);
-  return static_cast<std::uint16_t>((crc >> 16) ^ crc);
+  std::uint32_t folded = 0;
+  for (Address a = kUid; a < kUid + 12; a += 4) folded ^= Read32(a);
+  return static_cast<std::uint16_t>(folded ^ (folded >> 16));
 }
 
 std::uint32_t MsClock::Now() {

@@ -49,9 +49,9 @@ void HoldBridgeOff();
 // the clock tree runs). Nothing else is clocked.
 void EnableCanPeripherals();
 
-// The physical board: a hash of the chip's 96-bit unique id (RM0440 §48.1, at
-// 0x1FFF7590): CRC-32 of its 12 bytes, the two halves XORed. The application reports
-// the same in its BoardInfo.
+// The physical board: the chip's 96-bit unique id (RM0440 §48.1, at 0x1FFF7590), its
+// three words XOR-folded to 16 bits — the fold the application reports in its BoardInfo,
+// so a host sees one instance whichever image answers.
 std::uint16_t BoardInstance();
 
 // Milliseconds since the first call, from the DWT cycle counter at `cycles_per_ms`; exact
