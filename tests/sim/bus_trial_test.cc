@@ -140,7 +140,7 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
       const std::uint32_t tick = board.app().last().telemetry.tick;
       if (tick != last_tick + 1) ++run.tick_gaps;
       last_tick = tick;
-      run.faulted = run.faulted || board.app().state() == app::AppState::kFault;
+      run.faulted = run.faulted || board.app().state() == app::BoardState::kFault;
       node.Poll();
       CanFrame out;
       while (node.PopTx(&out)) {

@@ -229,7 +229,7 @@ class Rig {
   std::uint32_t now() const { return next_tick_ - 1; }
   std::uint32_t next_tick() const { return next_tick_; }
   bool bridge() { return board_.io().bridge_enabled(); }
-  app::AppState state() { return board_.app().state(); }
+  app::BoardState state() { return board_.app().state(); }
   // Plant-truth joint velocity at the instant tick `tick`'s sample was taken.
   double truth_velocity(std::uint32_t tick) const { return truth_velocity_.at(tick); }
 
@@ -241,7 +241,7 @@ class Rig {
     const plant::CableParams& cable = board_.plant().params().cable;
     cal.backlash.c_right = Angle::Quantize(cable.c_right_rad);
     cal.backlash.c_left = Angle::Quantize(cable.c_left_rad);
-    if (board_.app().SetCalibration(cal).result != app::CommandResult::kAccepted) {
+    if (board_.app().SetCalibration(cal).result != app::CommandOutcomeCode::kAccepted) {
       return Fail("calibration refused");
     }
     config_ = cal.AppliedTo(config_);
@@ -599,7 +599,7 @@ Measurement Measure(FaultCase c) {
   bool have_detectable = false;
   if (!IsLimit(c)) {
     while (rig.next_tick() < inject && rig.error().empty()) rig.Tick();
-    if (!rig.bridge() || rig.state() != app::AppState::kRunning) {
+    if (!rig.bridge() || rig.state() != app::BoardState::kRunning) {
       m.error = "not running when the fault was due";
       return finish();
     }
@@ -699,7 +699,7 @@ Measurement Measure(FaultCase c) {
   const auto tick_latched = [&](const double* hand = nullptr) {
     rig.Tick(hand);
     ++latched_seen;
-    if (!rig.bridge() && rig.state() == app::AppState::kFault) ++latched_ok;
+    if (!rig.bridge() && rig.state() == app::BoardState::kFault) ++latched_ok;
   };
   if (CausePersists(c)) {
     const std::uint32_t at = m.stop_tick + RefusalDelay(c, m.delay_ticks);
@@ -708,7 +708,7 @@ Measurement Measure(FaultCase c) {
     const std::uint8_t seq = rig.SendCommand(CommandCode::kClearFaults);
     tick_latched();  // judges the clear on this tick's sample
     m.cause_present_at_refusal = CausePresent(c, rig, m.delay_ticks);
-    m.fault_after_refusal = !rig.bridge() && rig.state() == app::AppState::kFault;
+    m.fault_after_refusal = !rig.bridge() && rig.state() == app::BoardState::kFault;
     const auto outcome = rig.AwaitResult(CommandCode::kClearFaults, seq);
     if (!outcome) {
       m.error = "the refused clear was not answered";
@@ -743,7 +743,7 @@ Measurement Measure(FaultCase c) {
   const auto outcome = rig.AwaitResult(CommandCode::kClearFaults, seq);
   m.clear_answered = outcome.has_value();
   if (outcome) m.clear_outcome = *outcome;
-  m.idle_after_clear = rig.state() == app::AppState::kIdle && !rig.bridge();
+  m.idle_after_clear = rig.state() == app::BoardState::kIdle && !rig.bridge();
   m.latched_ticks = latched_seen;
   m.latched = latched_seen > 0 && latched_ok == latched_seen;
 
