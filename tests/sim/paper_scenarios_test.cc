@@ -36,7 +36,8 @@ SweepConfig CalibrationSweep() {
 
 // A calibrated board with `subject`'s interface donned.
 struct Bench {
-  explicit Bench(const plant::PlantParams& robot) : board(robot, DefaultBoardConfig()) {
+  explicit Bench(const plant::PlantParams& robot)
+      : board(robot, app::DefaultJointConfig()) {
     calibration = RunCalibration(board, CalibrationSweep());
   }
   SimBoard board;
@@ -170,11 +171,11 @@ TEST(SimTrial, IndependentTrialsAreTheSameOnAnyNumberOfThreads) {
   };
   int calls = 0;
   const auto serial =
-      RunTrials(Robot(), DefaultBoardConfig(), bench.calibration.record, specs, 1,
+      RunTrials(Robot(), app::DefaultJointConfig(), bench.calibration.record, specs, 1,
                 [&calls](const std::string&, double) { ++calls; });
   EXPECT_EQ(calls, 5);
-  const auto parallel = RunTrials(Robot(), DefaultBoardConfig(), bench.calibration.record,
-                                  specs, 4, nullptr);
+  const auto parallel = RunTrials(Robot(), app::DefaultJointConfig(),
+                                  bench.calibration.record, specs, 4, nullptr);
   ASSERT_EQ(serial.size(), specs.size());
   ASSERT_EQ(parallel.size(), specs.size());
   for (std::size_t i = 0; i < specs.size(); ++i) {

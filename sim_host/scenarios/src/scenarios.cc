@@ -43,21 +43,6 @@ std::string FaultName(Fault f) { return "fault " + std::to_string(static_cast<in
 
 }  // namespace
 
-ControlConfig DefaultBoardConfig() {
-  ControlConfig c;
-  // Position-loop gains for the Maestro joint plant (sim_host/params: 13.7 Ω, 11.4
-  // mN·m/A, 100:1, 12 V). kff ≈ k_e·N/V_supply cancels the back-EMF at the commanded
-  // velocity; kp and ki hold the tracking error of a 25° 0.5 Hz sine under the interface
-  // load to well under a degree; kd damps the cable pick-up at the dead-band edges.
-  c.position.kp = Fixed<PerRadian, 16>::FromDouble(40.0);
-  c.position.ki = Fixed<PerRadianSecond, 16>::FromDouble(200.0);
-  c.position.kd = Fixed<SecondPerRadian, 16>::FromDouble(0.05);
-  c.position.kff = Fixed<SecondPerRadian, 16>::FromDouble(0.095);
-  c.position.max_duty = Duty::FromDouble(0.9);
-  c.position.integral_limit = Duty::FromDouble(0.5);
-  return c;
-}
-
 SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions) {
   SineConfig s;
   s.amplitude = Angle::Quantize(amplitude_deg * kPi / 180.0);

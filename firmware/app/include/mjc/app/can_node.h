@@ -144,7 +144,9 @@ class CanNode {
   JointApp* app_;
   CanNodeConfig config_;
   CanNodeCounters counters_;
-  SpscQueue<protocol::CanFrame, 128> tx_;
+  // 64 frames: a pass of the main loop queues at most a window (5 frames), the
+  // telemetry due (7) and a reply to each frame it took (JointBoard::kMostFramesPerPoll).
+  SpscQueue<protocol::CanFrame, 64> tx_;
   BoardClock clock_;
   protocol::TrialConfig trial_;
   protocol::SweepConfig sweep_;

@@ -41,6 +41,7 @@ constexpr bool ValidEnumValue(Fault f) {
     case Fault::kCommandTimeout:
     case Fault::kHostHeartbeatLost:
     case Fault::kCanBusOff:
+    case Fault::kBoardStartup:
       return true;
   }
   return false;
