@@ -183,7 +183,7 @@ MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kTelemetryAnglesHz, 100}, 1));
   b.Run(1);
   VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOk);
-  VT_EXPECT_EQ(b.node.config().angles_hz, 100);
+  VT_EXPECT_EQ(b.node.config().rates.angles_hz, 100);
   const std::uint32_t before = Sent<TelemetryAngles>(b);
   b.Run(1000);
   VT_EXPECT_TRUE(Sent<TelemetryAngles>(b) - before >= 9 &&
@@ -191,7 +191,7 @@ MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kTelemetryAnglesHz, 20000}, 1));
   b.Run(1);
   VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOutOfRange);
-  VT_EXPECT_EQ(b.node.config().angles_hz, 100);
+  VT_EXPECT_EQ(b.node.config().rates.angles_hz, 100);
   // A control gain: written while idle, refused while running.
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kPositionKp, 40 << 16}, 1));
   b.Run(2);
