@@ -32,7 +32,8 @@ constexpr double kHostHeartbeatHz = 1000.0 / kHostHeartbeatPeriod.count();
 
 }  // namespace
 
-BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards, const BusTiming& t) {
+BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards,
+                       const BusTiming& t) {
   BusLoad load;
   auto add = [&]<class M>(M, double hz, const char* suffix = "") {
     const int bytes = Message<M>::kLength;
