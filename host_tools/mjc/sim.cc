@@ -14,11 +14,13 @@
 
 #include "commands.h"
 #include "hal/sim/sim_flash.h"
-#include "mjc/app/can_node.h"
+#include "mjc/app/joint_board.h"
+#include "mjc/app/joint_config.h"
 #include "mjc/build_id.h"
 #include "mjc/host/can_link.h"
 #include "mjc/plant/params.h"
-#include "mjc/sim/scenarios.h"
+#include "mjc/sim/link_can_port.h"
+#include "mjc/sim/sim_board.h"
 
 namespace mjc::cli {
 namespace {
@@ -29,13 +31,9 @@ namespace {
 std::atomic<int> g_sensor_fault{0};  // +1 raise, -1 clear, 0 nothing new
 void OnSensorFaultSignal(int signal) { g_sensor_fault = signal == SIGUSR1 ? 1 : -1; }
 
-// Ticks between two reads of the CAN socket and of the clock: 1 ms at the board's
-// 10 kHz.
-constexpr std::uint64_t kReceiveEveryTicks = 10;
-// Frames taken per read, at most: a saturated CAN FD bus carries ~17 a millisecond,
-// but a vcan flood has no bus to limit it, and draining it all would stop the board's
-// ticks for as long as the flood lasts. The rest waits in the socket for the next read.
-constexpr int kMostFramesPerRead = 128;
+// Ticks between two passes of the board's main loop and two reads of the clock: 1 ms
+// at the board's 10 kHz.
+constexpr std::uint64_t kPollEveryTicks = 10;
 
 }  // namespace
 
@@ -75,19 +73,8 @@ void AddSim(CLI::App& app) {
     };
     plant::PlantParams params = load(robot);
     if (!subject.empty()) params.interface = load(subject).interface;
-    sim::SimBoard board(params, sim::DefaultBoardConfig());
-    // Flash: two 2 KB pages for the calibration's A/B records, as on the board.
-    hal::SimFlash flash(2, flash_path, &why);
-    if (!why.empty()) std::fprintf(stderr, "mjc sim: %s\n", why.c_str());
-    app::CalibrationStore store(&flash, 0, 1);
-    if (const auto restored = app::RestoreCalibration(board.app(), store)) {
-      board.Tick();  // applies it
-      std::fprintf(stderr, "mjc sim: restored calibration #%u from flash\n",
-                   restored->sequence);
-    } else {
-      std::fprintf(stderr, "mjc sim: no stored calibration: uncalibrated\n");
-    }
-    app::CanNodeConfig node_config;
+    app::JointBoardConfig config{app::DefaultJointConfig(), {}, 0, 1};
+    app::CanNodeConfig& node_config = config.can;
     node_config.node = static_cast<std::uint8_t>(node);
     // Who this board is: this build, just powered on, and an identity of its own
     // drawn at random (a board's comes from its chip's unique id).
@@ -102,7 +89,19 @@ void AddSim(CLI::App& app) {
         speed == 0 ? std::uint16_t{0}
                    : static_cast<std::uint16_t>(std::clamp(
                          std::lround(node_config.host_timeout_ms * speed), 1L, 60000L));
-    app::CanNode can(&board.app(), node_config, &store);
+    // Flash: two 2 KB pages for the calibration's A/B records, as on the board.
+    hal::SimFlash flash(2, flash_path, &why);
+    if (!why.empty()) std::fprintf(stderr, "mjc sim: %s\n", why.c_str());
+    // The board's CAN controller is the link: its error frames stand for the
+    // controller's own (a bus-off report is the driver's bus-off interrupt).
+    sim::LinkCanPort port(link.get());
+    sim::SimBoard board(params, config, &port, &flash);
+    if (const auto restored = board.board().Boot()) {
+      std::fprintf(stderr, "mjc sim: restored calibration #%u from flash\n",
+                   restored->sequence);
+    } else {
+      std::fprintf(stderr, "mjc sim: no stored calibration: uncalibrated\n");
+    }
     const std::atomic<bool>& stop = StopOnSignals();
     std::signal(SIGUSR1, OnSensorFaultSignal);
     std::signal(SIGUSR2, OnSensorFaultSignal);
@@ -120,27 +119,21 @@ void AddSim(CLI::App& app) {
     std::uint64_t origin_tick = 0;
     double lost_s = 0;  // wall time the board fell behind its speed, in all
     bool warned = false;
-    // The link's error frames stand for this board's CAN controller: a bus-off report
-    // is the driver's bus-off interrupt (the motor stops, kCanBusOff). The simulated
-    // controller rejoins at once, as the board's does after its recovery sequence.
-    std::uint64_t bus_off_seen = link->stats().bus_off;
+    std::uint32_t bus_off_seen = 0;
     while (!stop && (seconds == 0 || static_cast<double>(ticks) * period < seconds)) {
-      // The socket is read once a millisecond of board time: a system call per 100 µs
-      // tick cost more than the plant under emulation (41 % of a QEMU TCG vCPU for a
-      // board at speed 1, half of it in the kernel). A frame waits at most 1 ms.
-      if (ticks % kReceiveEveryTicks == 0) {
-        host::ReceiveResult r;
-        for (int n = 0; n < kMostFramesPerRead && (r = link->Receive(0, &why)); ++n) {
-          can.HandleFrame(r->frame);
+      // The main loop's pass once a millisecond of board time: under emulation each
+      // read of the socket is a system call, and reading it every 100 µs tick cost
+      // more than the plant (41 % of a QEMU TCG vCPU for a board at speed 1, half of
+      // it in the kernel). A frame waits at most 1 ms.
+      if (ticks % kPollEveryTicks == 0) {
+        board.Poll();
+        if (port.failed()) throw Failure(port.error());
+        for (; bus_off_seen < board.board().node().counters().bus_off; ++bus_off_seen) {
+          std::fprintf(stderr,
+                       "mjc sim: %s: bus-off at %.4f s: motor stopped (fault 303) until "
+                       "the host clears it\n",
+                       iface.c_str(), static_cast<double>(ticks) * period);
         }
-        if (r.status == host::ReceiveStatus::kError) throw Failure(why);
-      }
-      for (; bus_off_seen < link->stats().bus_off; ++bus_off_seen) {
-        can.OnBusOff();
-        std::fprintf(stderr,
-                     "mjc sim: %s: bus-off at %.4f s: motor stopped (fault 303) until "
-                     "the host clears it\n",
-                     iface.c_str(), static_cast<double>(ticks) * period);
       }
       if (const int fault = g_sensor_fault.exchange(0); fault != 0) {
         if (fault > 0) {
@@ -153,15 +146,10 @@ void AddSim(CLI::App& app) {
                      static_cast<double>(ticks) * period);
       }
       board.Tick();
-      can.Poll();
-      protocol::CanFrame out;
-      while (can.PopTx(&out)) {
-        if (!link->Send(out, &why)) std::fprintf(stderr, "mjc sim: %s\n", why.c_str());
-      }
       ++ticks;
       // Paced a millisecond of board time at a time: reading the clock costs a system
       // call in a virtual machine whose clock source is emulated (HPET under QEMU TCG).
-      if (speed > 0 && ticks % kReceiveEveryTicks == 0) {
+      if (speed > 0 && ticks % kPollEveryTicks == 0) {
         const auto due =
             origin +
             std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
@@ -190,8 +178,8 @@ void AddSim(CLI::App& app) {
     }
     // What reached the socket before the stop is the board's to account for: a
     // sender that has finished has put all of it there.
-    for (host::ReceiveResult r; (r = link->Receive(0, &why));) can.HandleFrame(r->frame);
-    const auto& c = can.counters();
+    for (protocol::CanFrame f; port.Receive(&f);) board.board().node().HandleFrame(f);
+    const app::CanNodeCounters c = board.board().node().counters();
     const double simulated_s = static_cast<double>(ticks) * period;
     const double wall_s = std::chrono::duration<double>(Clock::now() - started).count();
     if (speed > 0) {

@@ -30,6 +30,8 @@ std::string_view FaultName(Fault fault) {
       return "streamed setpoints stopped";
     case Fault::kHostHeartbeatLost:
       return "host heartbeat lost";
+    case Fault::kBoardStartup:
+      return "board start-up failed";
     case Fault::kCanBusOff:
       return "CAN bus-off";
   }

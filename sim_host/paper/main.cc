@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
       robot.sensors.joint_noise_counts = 0;
       robot.sensors.motor_noise_counts = 0;
     }
-    ControlConfig config = sim::DefaultBoardConfig();
+    ControlConfig config = app::DefaultJointConfig();
     if (opt.velocity_window != 0) {
       config.velocity_window = static_cast<std::uint16_t>(opt.velocity_window);
     }

@@ -29,7 +29,7 @@ int main() {
   robot.integration.max_step_s = 100e-6;  // mjc-paper's substep: one a tick
 
   const auto start = std::chrono::steady_clock::now();
-  SimBoard board(robot, DefaultBoardConfig());
+  SimBoard board(robot, app::DefaultJointConfig());
   SweepConfig sweep;
   sweep.end_amplitude = Angle::Quantize(30.0 * kDeg);
   sweep.frequency = Frequency::FromDouble(0.5);

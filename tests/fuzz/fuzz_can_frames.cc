@@ -6,7 +6,7 @@
 #include <cstring>
 #include <tuple>
 
-#include "mjc/app/can_node.h"
+#include "mjc/app/joint_board.h"
 #include "mjc/protocol/codec.h"
 
 using namespace mjc;
@@ -31,9 +31,11 @@ void RoundTrip(const CanFrame& f) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static app::JointApp app{ControlConfig{}};
-  static app::CanNode node(&app, app::CanNodeConfig{});
+  // The firmware's board, without a bus: frames go straight to its CAN node (each must
+  // be accounted for), and its main loop's pass runs after every tick.
+  static app::JointBoard board(app::JointBoardConfig{}, nullptr, nullptr);
   static QuietIo io;
+  app::CanNode& node = board.node();
   // A stream of frames: [id_hi id_lo len flags data(len)]...
   std::size_t i = 0;
   while (i + 4 <= size) {
@@ -51,11 +53,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (node.counters().received() != before + 1) {
       __builtin_trap();  // a frame not accounted for
     }
-    app.ISR_Tick(io);
-    node.Poll();
-    CanFrame out;
-    while (node.PopTx(&out)) {
-    }
+    board.ISR_Tick(io);
+    board.Poll();
   }
   return 0;
 }

@@ -1,5 +1,5 @@
-// Calibration upload over real ISO-TP: inside the VM, a board (JointApp + CanNode on a
-// raw SocketCAN socket, ticking at 10 kHz) receives a calibration record sent by the
+// Calibration upload over real ISO-TP: inside the VM, a board (the firmware's JointBoard
+// on a raw SocketCAN socket, ticking at 10 kHz) receives a calibration record sent by the
 // Linux kernel's own ISO-TP implementation (the host's IsoTpLink) — an ISO-TP stack we
 // did not write — and answers [result, detail]. A corrupted record is refused with its
 // reason and the old calibration stays. Prints "cal_upload_ms: N" (end to end: send,
@@ -10,9 +10,10 @@
 #include <string>
 #include <thread>
 
-#include "mjc/app/can_node.h"
+#include "mjc/app/joint_board.h"
 #include "mjc/host/can_link.h"
 #include "mjc/protocol/calibration_record.h"
+#include "mjc/sim/link_can_port.h"
 
 namespace {
 
@@ -43,19 +44,17 @@ int main() {
     std::printf("FAIL open vcan0: %s\n0 passed, 1 failed\n", why.c_str());
     return 1;
   }
-  static app::JointApp app{ControlConfig{}};
-  static app::CanNode node(&app, app::CanNodeConfig{});  // node 1
+  sim::LinkCanPort port(board_link.get());
+  static app::JointBoard joint_board(app::JointBoardConfig{}, &port, nullptr);  // node 1
+  const app::JointApp& app = joint_board.app();
+  const app::CanNode& node = joint_board.node();
   std::atomic<bool> stop{false};
   std::thread board([&] {
     QuietIo io;
-    std::string bwhy;
     auto next = std::chrono::steady_clock::now();
     while (!stop) {
-      while (auto f = board_link->Receive(0, &bwhy)) node.HandleFrame(f->frame);
-      app.ISR_Tick(io);
-      node.Poll();
-      CanFrame out;
-      while (node.PopTx(&out)) board_link->Send(out, &bwhy);
+      joint_board.ISR_Tick(io);
+      joint_board.Poll();
       next += std::chrono::microseconds(100);
       std::this_thread::sleep_until(next);
     }

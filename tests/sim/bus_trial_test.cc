@@ -23,6 +23,7 @@
 #include "mjc/app/can_node.h"
 #include "mjc/host/trial_runner.h"
 #include "mjc/plant/params.h"
+#include "mjc/sim/link_can_port.h"
 #include "mjc/sim/scenarios.h"
 
 namespace {
@@ -97,6 +98,31 @@ struct BoardRun {
   bool faulted = false;
 };
 
+// The board's port on the in-process bus, counting what passes: the host's frames in,
+// the parameter replies out.
+class CountingPort final : public hal::CanPort {
+ public:
+  explicit CountingPort(host::CanLink* link) : port_(link) {}
+  std::uint32_t received = 0;
+  std::uint32_t param_replies = 0;
+
+ private:
+  bool DoSend(const CanFrame& f) override {
+    if (FunctionOf(f.id) == static_cast<std::uint8_t>(Function::kParamValue)) {
+      ++param_replies;
+    }
+    return port_.Send(f);
+  }
+  bool DoReceive(CanFrame* f) override {
+    if (!port_.Receive(f)) return false;
+    ++received;
+    return true;
+  }
+  std::uint32_t DoTakeBusOff() override { return port_.TakeBusOff(); }
+  hal::CanPortCounters DoCounters() const override { return port_.counters(); }
+  sim::LinkCanPort port_;
+};
+
 // Five 15° repetitions at 0.5 Hz on subject 1's hand, calibrated with the plant's own
 // slack; `flood` (may be null) adds `per_tick` frames before every tick.
 BoardRun RunTrial(Flood* flood, int per_tick) {
@@ -106,25 +132,22 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
 
   plant::PlantParams params = plant::LoadPlantParams("default");
   params.interface = plant::LoadPlantParams("subject1").interface;
-  sim::SimBoard board(params, sim::DefaultBoardConfig());
+  CountingPort port(board_link.get());
+  sim::SimBoard board(params, app::JointBoardConfig{app::DefaultJointConfig(), {}, 0, 1},
+                      &port);
   Calibration cal;
   cal.backlash.c_right = Angle::Quantize(params.cable.c_right_rad);
   cal.backlash.c_left = Angle::Quantize(params.cable.c_left_rad);
   board.app().SetCalibration(cal);
   board.Tick();
-  app::CanNode node(&board.app(), app::CanNodeConfig{});
+  app::CanNode& node = board.board().node();
 
   BoardRun run;
   std::mutex truth_mutex;
   std::atomic<bool> stop{false};
   std::thread board_thread([&] {
-    std::string why;
     std::uint32_t last_tick = board.app().last().telemetry.tick;
     while (!stop) {
-      while (auto f = board_link->Receive(0)) {
-        node.HandleFrame(f->frame);
-        ++run.from_host;
-      }
       for (int i = 0; flood != nullptr && i < per_tick; ++i) {
         node.HandleFrame(flood->Next());
         ++run.flooded;
@@ -140,15 +163,8 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
       const std::uint32_t tick = board.app().last().telemetry.tick;
       if (tick != last_tick + 1) ++run.tick_gaps;
       last_tick = tick;
-      run.faulted = run.faulted || board.app().state() == app::AppState::kFault;
-      node.Poll();
-      CanFrame out;
-      while (node.PopTx(&out)) {
-        if (FunctionOf(out.id) == static_cast<std::uint8_t>(Function::kParamValue)) {
-          ++run.param_replies;
-        }
-        board_link->Send(out, &why);
-      }
+      run.faulted = run.faulted || board.app().state() == app::BoardState::kFault;
+      board.Poll();
     }
   });
 
@@ -162,6 +178,8 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
       client, config, [&](const host::BoardWindow&) { ++run.progress_lines; });
   stop = true;
   board_thread.join();
+  run.from_host = port.received;
+  run.param_replies = port.param_replies;
   run.host_malformed = client.malformed();
   run.counters = node.counters();
   return run;

@@ -36,7 +36,8 @@ SweepConfig CalibrationSweep() {
 
 // A calibrated board with `subject`'s interface donned.
 struct Bench {
-  explicit Bench(const plant::PlantParams& robot) : board(robot, DefaultBoardConfig()) {
+  explicit Bench(const plant::PlantParams& robot)
+      : board(robot, app::DefaultJointConfig()) {
     calibration = RunCalibration(board, CalibrationSweep());
   }
   SimBoard board;
@@ -170,11 +171,11 @@ TEST(SimTrial, IndependentTrialsAreTheSameOnAnyNumberOfThreads) {
   };
   int calls = 0;
   const auto serial =
-      RunTrials(Robot(), DefaultBoardConfig(), bench.calibration.record, specs, 1,
+      RunTrials(Robot(), app::DefaultJointConfig(), bench.calibration.record, specs, 1,
                 [&calls](const std::string&, double) { ++calls; });
   EXPECT_EQ(calls, 5);
-  const auto parallel = RunTrials(Robot(), DefaultBoardConfig(), bench.calibration.record,
-                                  specs, 4, nullptr);
+  const auto parallel = RunTrials(Robot(), app::DefaultJointConfig(),
+                                  bench.calibration.record, specs, 4, nullptr);
   ASSERT_EQ(serial.size(), specs.size());
   ASSERT_EQ(parallel.size(), specs.size());
   for (std::size_t i = 0; i < specs.size(); ++i) {
@@ -197,15 +198,15 @@ void ExpectSameTickStop(plant::SensorFaultKind kind, Fault expected,
   ASSERT_TRUE(bench.calibration.uploaded);
   bench.board.plant().SetInterface(plant::LoadPlantParams("subject1").interface);
   app::JointApp& app = bench.board.app();
-  ASSERT_EQ(app.StartTrial(PaperSine(25)).result, app::CommandResult::kAccepted);
+  ASSERT_EQ(app.StartTrial(PaperSine(25)).result, app::CommandOutcomeCode::kAccepted);
   for (int i = 0; i < 8000; ++i) bench.board.Tick();  // mid-flexion
-  ASSERT_EQ(app.state(), app::AppState::kRunning);
+  ASSERT_EQ(app.state(), app::BoardState::kRunning);
   ASSERT_TRUE(bench.board.io().bridge_enabled());
   bench.board.plant().InjectFault({kind, 0, jump});
   bench.board.Tick();
   EXPECT_FALSE(bench.board.io().bridge_enabled());
   EXPECT_EQ(bench.board.io().duty(), 0.0);
-  EXPECT_EQ(app.state(), app::AppState::kFault);
+  EXPECT_EQ(app.state(), app::BoardState::kFault);
   EXPECT_EQ(app.last().raised, expected);
 }
 
@@ -230,12 +231,12 @@ TEST(SimFaults, StuckJointEncoderIsCaught) {
   ASSERT_TRUE(bench.calibration.uploaded);
   bench.board.plant().SetInterface(plant::LoadPlantParams("subject1").interface);
   app::JointApp& app = bench.board.app();
-  ASSERT_EQ(app.StartTrial(PaperSine(25)).result, app::CommandResult::kAccepted);
+  ASSERT_EQ(app.StartTrial(PaperSine(25)).result, app::CommandOutcomeCode::kAccepted);
   // 1.5 s of rest, then a quarter cycle: the first flexion peak.
   for (int i = 0; i < 15000 + 5000; ++i) bench.board.Tick();
   bench.board.plant().InjectFault({plant::SensorFaultKind::kJointStuck, 0, 0});
   int ticks = 0;
-  while (app.state() != app::AppState::kFault && ticks < 10000) {
+  while (app.state() != app::BoardState::kFault && ticks < 10000) {
     bench.board.Tick();
     ++ticks;
   }

@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <deque>
+#include <functional>
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <utility>
 #include <vector>
 
-#include "mjc/app/can_node.h"
+#include "mjc/app/joint_board.h"
 #include "mjc/plant/params.h"
 #include "mjc/protocol/codec.h"
 #include "mjc/sim/scenarios.h"
@@ -196,7 +199,7 @@ class SampleReference {
 };
 
 ControlConfig CaseConfig(FaultCase c) {
-  ControlConfig config = sim::DefaultBoardConfig();
+  ControlConfig config = app::DefaultJointConfig();
   SupervisorConfig& s = config.supervisor;
   if (c == FaultCase::kJointAngleLimit) s.joint_max = Angle::Quantize(kJointMaxRad);
   if (c == FaultCase::kMotorAngleLimit) s.motor_max = Angle::Quantize(kMotorMaxRad);
@@ -206,19 +209,50 @@ ControlConfig CaseConfig(FaultCase c) {
   return config;  // the torque limit is lowered over the bus (Rig::PowerOn)
 }
 
-// The board, its CAN node and the host's side of the bus, one tick at a time.
+// The rig's bus, as the board's CAN port sees it: the host side's frames wait in the
+// inbox for the board's main loop; the board's frames reach the host side at once, or,
+// while the bus is down, wait in the board's queue; a bus-off report waits for the main
+// loop, as the driver's interrupt flag would.
+class RigBus final : public hal::CanPort {
+ public:
+  explicit RigBus(std::function<void(const CanFrame&)> deliver)
+      : deliver_(std::move(deliver)) {}
+  std::deque<CanFrame> inbox;
+  bool down = false;
+  std::uint32_t bus_off = 0;
+
+ private:
+  bool DoSend(const CanFrame& frame) override {
+    if (down) return false;
+    deliver_(frame);
+    return true;
+  }
+  bool DoReceive(CanFrame* frame) override {
+    if (inbox.empty()) return false;
+    *frame = inbox.front();
+    inbox.pop_front();
+    return true;
+  }
+  std::uint32_t DoTakeBusOff() override { return std::exchange(bus_off, 0); }
+  hal::CanPortCounters DoCounters() const override { return {}; }
+  std::function<void(const CanFrame&)> deliver_;
+};
+
+// The board (the firmware's JointBoard on the plant) and the host's side of the bus,
+// one tick at a time.
 class Rig {
  public:
   explicit Rig(FaultCase c)
       : case_(c),
         config_(CaseConfig(c)),
-        board_(plant::LoadPlantParams("subject1"), config_),
-        node_(&board_.app(), app::CanNodeConfig{}),
+        bus_([this](const CanFrame& frame) { Receive(frame); }),
+        board_(plant::LoadPlantParams("subject1"),
+               app::JointBoardConfig{config_, {}, 0, 1}, &bus_),
         reference_(config_),
         base_preload_Nm_(board_.plant().params().interface.preload_Nm) {}
 
   sim::SimBoard& board() { return board_; }
-  app::CanNode& node() { return node_; }
+  app::CanNode& node() { return board_.board().node(); }
   const SampleReference& reference() const { return reference_; }
   const std::string& error() const { return error_; }
   void Fail(const std::string& why) {
@@ -229,7 +263,7 @@ class Rig {
   std::uint32_t now() const { return next_tick_ - 1; }
   std::uint32_t next_tick() const { return next_tick_; }
   bool bridge() { return board_.io().bridge_enabled(); }
-  app::AppState state() { return board_.app().state(); }
+  app::BoardState state() { return board_.app().state(); }
   // Plant-truth joint velocity at the instant tick `tick`'s sample was taken.
   double truth_velocity(std::uint32_t tick) const { return truth_velocity_.at(tick); }
 
@@ -241,7 +275,7 @@ class Rig {
     const plant::CableParams& cable = board_.plant().params().cable;
     cal.backlash.c_right = Angle::Quantize(cable.c_right_rad);
     cal.backlash.c_left = Angle::Quantize(cable.c_left_rad);
-    if (board_.app().SetCalibration(cal).result != app::CommandResult::kAccepted) {
+    if (board_.app().SetCalibration(cal).result != app::CommandOutcomeCode::kAccepted) {
       return Fail("calibration refused");
     }
     config_ = cal.AppliedTo(config_);
@@ -287,10 +321,15 @@ class Rig {
     return first;
   }
 
-  // One main-loop turn: the host's frames, the tick (the pulley moved by hand to
-  // `hand_pulley_rad` if given), CanNode::Poll, the transmit queue onto the bus.
+  // One tick and the main loop around it: the host's frames taken by a pass of the
+  // board's main loop before the tick (the pulley moved by hand to `hand_pulley_rad` if
+  // given), and a pass after it that sends the tick's verdicts, events and telemetry.
   void Tick(const double* hand_pulley_rad = nullptr) {
     HostSide();
+    if (bus_.down && static_cast<std::int32_t>(now() - bus_up_tick_) >= 0) {
+      bus_.down = false;
+    }
+    board_.Poll();
     if (overrun_) board_.io().InjectOverrun();
     if (pushing_ && next_tick_ >= push_start_) {
       const double f =
@@ -316,11 +355,10 @@ class Rig {
     reference_.Update(board_.io().last_sample(), applied_duty_);
     applied_duty_ = board_.io().duty();
     ++next_tick_;
-    node_.Poll();
-    if (bus_down_ && static_cast<std::int32_t>(now() - bus_up_tick_) >= 0)
-      bus_down_ = false;
-    CanFrame frame;
-    while (!bus_down_ && node_.PopTx(&frame)) Receive(frame);
+    if (bus_.down && static_cast<std::int32_t>(now() - bus_up_tick_) >= 0) {
+      bus_.down = false;
+    }
+    board_.Poll();
   }
 
   std::uint8_t SendCommand(CommandCode code) {
@@ -358,8 +396,8 @@ class Rig {
   void StopStream() { streaming_ = false; }
   void SetOverrun(bool on) { overrun_ = on; }
   void BusOff() {
-    node_.OnBusOff();
-    bus_down_ = true;
+    ++bus_.bus_off;
+    bus_.down = true;
     bus_up_tick_ = now() + kBusOffRecoveryTicks;
   }
   std::uint32_t last_heartbeat_rx() const { return last_heartbeat_rx_; }
@@ -369,8 +407,8 @@ class Rig {
  private:
   template <class M>
   void Send(const M& message) {
-    if (bus_down_) return;  // lost with the bus
-    node_.HandleFrame(protocol::Encode(message, kNode));
+    if (bus_.down) return;  // lost with the bus
+    bus_.inbox.push_back(protocol::Encode(message, kNode));
   }
 
   void Reconfigured() {
@@ -384,7 +422,7 @@ class Rig {
     const std::uint32_t hz = board_.tick_hz();
     if (heartbeats_ && next_tick_ >= next_heartbeat_tick_ && next_tick_ > 0) {
       Send(protocol::HostHeartbeat{++heartbeat_sequence_, kSession});
-      if (!bus_down_) last_heartbeat_rx_ = now();
+      if (!bus_.down) last_heartbeat_rx_ = now();
       next_heartbeat_tick_ = next_tick_ + hz / 10;  // 10 Hz
     }
     if (streaming_ && next_tick_ >= next_setpoint_tick_) {
@@ -393,7 +431,7 @@ class Rig {
       s.position = Angle::Quantize(kAmplitudeRad * std::sin(2 * kPi * 0.5 * t));
       s.sequence = ++setpoint_sequence_;
       Send(s);
-      if (!bus_down_) last_setpoint_rx_ = now();
+      if (!bus_.down) last_setpoint_rx_ = now();
       next_setpoint_tick_ = next_tick_ + hz / 100;  // 100 Hz
     }
   }
@@ -434,8 +472,8 @@ class Rig {
 
   FaultCase case_;
   ControlConfig config_;
+  RigBus bus_;
   sim::SimBoard board_;
-  app::CanNode node_;
   SampleReference reference_;
   std::string error_;
   std::uint32_t next_tick_ = 0;
@@ -455,7 +493,6 @@ class Rig {
   double push_from_ = 0, push_to_ = 0;
   std::uint32_t push_start_ = 0, push_ramp_ = 1;
   double base_preload_Nm_;
-  bool bus_down_ = false;
   std::uint32_t bus_up_tick_ = 0;
   std::uint8_t sequence_ = 0;
   bool param_ok_ = false;
@@ -599,7 +636,7 @@ Measurement Measure(FaultCase c) {
   bool have_detectable = false;
   if (!IsLimit(c)) {
     while (rig.next_tick() < inject && rig.error().empty()) rig.Tick();
-    if (!rig.bridge() || rig.state() != app::AppState::kRunning) {
+    if (!rig.bridge() || rig.state() != app::BoardState::kRunning) {
       m.error = "not running when the fault was due";
       return finish();
     }
@@ -699,7 +736,7 @@ Measurement Measure(FaultCase c) {
   const auto tick_latched = [&](const double* hand = nullptr) {
     rig.Tick(hand);
     ++latched_seen;
-    if (!rig.bridge() && rig.state() == app::AppState::kFault) ++latched_ok;
+    if (!rig.bridge() && rig.state() == app::BoardState::kFault) ++latched_ok;
   };
   if (CausePersists(c)) {
     const std::uint32_t at = m.stop_tick + RefusalDelay(c, m.delay_ticks);
@@ -708,7 +745,7 @@ Measurement Measure(FaultCase c) {
     const std::uint8_t seq = rig.SendCommand(CommandCode::kClearFaults);
     tick_latched();  // judges the clear on this tick's sample
     m.cause_present_at_refusal = CausePresent(c, rig, m.delay_ticks);
-    m.fault_after_refusal = !rig.bridge() && rig.state() == app::AppState::kFault;
+    m.fault_after_refusal = !rig.bridge() && rig.state() == app::BoardState::kFault;
     const auto outcome = rig.AwaitResult(CommandCode::kClearFaults, seq);
     if (!outcome) {
       m.error = "the refused clear was not answered";
@@ -743,7 +780,7 @@ Measurement Measure(FaultCase c) {
   const auto outcome = rig.AwaitResult(CommandCode::kClearFaults, seq);
   m.clear_answered = outcome.has_value();
   if (outcome) m.clear_outcome = *outcome;
-  m.idle_after_clear = rig.state() == app::AppState::kIdle && !rig.bridge();
+  m.idle_after_clear = rig.state() == app::BoardState::kIdle && !rig.bridge();
   m.latched_ticks = latched_seen;
   m.latched = latched_seen > 0 && latched_ok == latched_seen;
 

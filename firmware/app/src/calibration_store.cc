@@ -77,7 +77,7 @@ std::optional<CalibrationStore::Loaded> RestoreCalibration(
   const protocol::CalibrationRecord& r = loaded->record;
   const CommandOutcome o =
       app.SetCalibration({r.backlash, r.sea_stiffness, r.joint_zero_count});
-  if (o.result != CommandResult::kAccepted) return std::nullopt;
+  if (o.result != CommandOutcomeCode::kAccepted) return std::nullopt;
   return loaded;
 }
 

@@ -5,26 +5,47 @@ namespace {
 
 template <class Error>
 CommandOutcome Invalid(Error e) {
-  return {CommandResult::kRefusedInvalid, static_cast<std::uint8_t>(e)};
+  return {CommandOutcomeCode::kRefusedInvalid, static_cast<std::uint8_t>(e)};
 }
 
 }  // namespace
 
-JointApp::JointApp(const ControlConfig& config) { control_.Configure(config); }
+JointApp::JointApp(const ControlConfig& config) {
+  control_.Configure(config);
+  main_config_ = control_.config();
+}
+
+const ControlConfig& JointApp::config() const {
+  const std::uint32_t generation = config_generation_.load(std::memory_order_acquire);
+  if (generation != main_generation_) {
+    // The tick may apply yet another one during the copy: the copy is taken again then.
+    main_config_ = done_.Read([this] { return control_.config(); });
+    main_generation_ = generation;
+  }
+  return main_config_;
+}
 
 CommandOutcome JointApp::Submit(const Command& command) {
-  if (!commands_.Push(command)) return {CommandResult::kRefusedBusy, 0};
+  if (!commands_.Push(command)) return {CommandOutcomeCode::kRefusedBusy, 0};
+  return {};
+}
+
+CommandOutcome JointApp::CheckStart(bool needs_calibration, BoardState state,
+                                    bool calibrated) {
+  if (state != BoardState::kIdle) return {CommandOutcomeCode::kRefusedNotIdle, 0};
+  if (needs_calibration && !calibrated)
+    return {CommandOutcomeCode::kRefusedUncalibrated, 0};
   return {};
 }
 
 CommandOutcome JointApp::CheckStart(bool needs_calibration) const {
-  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
-  if (needs_calibration && !calibrated_) return {CommandResult::kRefusedUncalibrated, 0};
-  return {};
+  const Snapshot last = Latest();
+  return CheckStart(needs_calibration, last.state, last.calibrated);
 }
 
 CommandOutcome JointApp::Configure(const ControlConfig& config, RequestTag tag) {
-  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
+  if (Latest().state != BoardState::kIdle)
+    return {CommandOutcomeCode::kRefusedNotIdle, 0};
   const ControlConfigError error = ControlTick::Validate(config);
   if (error != ControlConfigError::kOk) return Invalid(error);
   Command c;
@@ -35,7 +56,8 @@ CommandOutcome JointApp::Configure(const ControlConfig& config, RequestTag tag) 
 }
 
 CommandOutcome JointApp::SetCalibration(const Calibration& calibration, RequestTag tag) {
-  if (state_ != AppState::kIdle) return {CommandResult::kRefusedNotIdle, 0};
+  if (Latest().state != BoardState::kIdle)
+    return {CommandOutcomeCode::kRefusedNotIdle, 0};
   const CalibrationError error = Validate(calibration);
   if (error != CalibrationError::kOk) return Invalid(error);
   Command c;
@@ -46,7 +68,8 @@ CommandOutcome JointApp::SetCalibration(const Calibration& calibration, RequestT
 }
 
 CommandOutcome JointApp::StartTrial(const SineConfig& sine, RequestTag tag) {
-  if (const CommandOutcome o = CheckStart(true); o.result != CommandResult::kAccepted) {
+  if (const CommandOutcome o = CheckStart(true);
+      o.result != CommandOutcomeCode::kAccepted) {
     return o;
   }
   const TrajectoryError error = Validate(sine);
@@ -59,7 +82,8 @@ CommandOutcome JointApp::StartTrial(const SineConfig& sine, RequestTag tag) {
 }
 
 CommandOutcome JointApp::StartCalibrationSweep(const SweepConfig& sweep, RequestTag tag) {
-  if (const CommandOutcome o = CheckStart(false); o.result != CommandResult::kAccepted) {
+  if (const CommandOutcome o = CheckStart(false);
+      o.result != CommandOutcomeCode::kAccepted) {
     return o;
   }
   const TrajectoryError error = Validate(sweep);
@@ -72,10 +96,11 @@ CommandOutcome JointApp::StartCalibrationSweep(const SweepConfig& sweep, Request
 }
 
 CommandOutcome JointApp::StartStream(AngularVelocity max_rate, RequestTag tag) {
-  if (const CommandOutcome o = CheckStart(true); o.result != CommandResult::kAccepted) {
+  if (const CommandOutcome o = CheckStart(true);
+      o.result != CommandOutcomeCode::kAccepted) {
     return o;
   }
-  const TrajectoryError error = ValidateStreamRate(max_rate, control_.config().tick_hz);
+  const TrajectoryError error = ValidateStreamRate(max_rate, config().tick_hz);
   if (error != TrajectoryError::kOk) return Invalid(error);
   Command c;
   c.kind = CommandKind::kStartStream;
@@ -133,10 +158,10 @@ JointApp::Snapshot JointApp::Latest() const {
   });
 }
 
-void JointApp::ISR_Enter(AppState next) {
+void JointApp::ISR_Enter(BoardState next) {
   if (next == state_) return;
   state_ = next;
-  control_.Arm(next == AppState::kRunning || next == AppState::kCalibrating);
+  control_.Arm(next == BoardState::kRunning || next == BoardState::kCalibrating);
   AppEvent e;
   e.kind = AppEvent::Kind::kStateChanged;
   e.tick = result_.telemetry.tick;
@@ -148,7 +173,7 @@ void JointApp::ISR_ApplyCommand() {
   // Read in place: an empty mailbox costs two loads, a command no copy.
   const Command* c = commands_.Front();
   if (c == nullptr) return;
-  if (c->kind == CommandKind::kClearFaults && state_ == AppState::kFault) {
+  if (c->kind == CommandKind::kClearFaults && state_ == BoardState::kFault) {
     // Judged in this tick's step, on this tick's sample; answered in ISR_AfterStep.
     control_.RequestClearFaults();
     clear_pending_ = true;
@@ -160,35 +185,37 @@ void JointApp::ISR_ApplyCommand() {
 }
 
 CommandOutcome JointApp::ISR_Apply(const Command& c) {
-  const bool idle = state_ == AppState::kIdle;
+  const bool idle = state_ == BoardState::kIdle;
   switch (c.kind) {
     case CommandKind::kConfigure:
     case CommandKind::kSetCalibration: {
-      if (!idle) return {CommandResult::kRefusedNotIdle, 0};
+      if (!idle) return {CommandOutcomeCode::kRefusedNotIdle, 0};
       const bool calibration = c.kind == CommandKind::kSetCalibration;
       // Validated when submitted; Configure checks again, so nothing unchecked runs.
       const ControlConfigError error = control_.Configure(
           calibration ? c.calibration.AppliedTo(control_.config()) : c.config);
       if (error != ControlConfigError::kOk) return Invalid(error);
       if (calibration) calibrated_ = true;
+      config_generation_.store(config_generation_.load(std::memory_order_relaxed) + 1,
+                               std::memory_order_release);
       return {};
     }
     case CommandKind::kStartTrial:
     case CommandKind::kStartSweep: {
       const bool trial = c.kind == CommandKind::kStartTrial;
-      if (const CommandOutcome o = CheckStart(trial);
-          o.result != CommandResult::kAccepted) {
+      if (const CommandOutcome o = CheckStart(trial, state_, calibrated_);
+          o.result != CommandOutcomeCode::kAccepted) {
         return o;
       }
       const TrajectoryError error = trial ? control_.trajectory().StartSine(c.sine)
                                           : control_.trajectory().StartSweep(c.sweep);
       if (error != TrajectoryError::kOk) return Invalid(error);
-      ISR_Enter(trial ? AppState::kRunning : AppState::kCalibrating);
+      ISR_Enter(trial ? BoardState::kRunning : BoardState::kCalibrating);
       return {};
     }
     case CommandKind::kStartStream: {
-      if (const CommandOutcome o = CheckStart(true);
-          o.result != CommandResult::kAccepted) {
+      if (const CommandOutcome o = CheckStart(true, state_, calibrated_);
+          o.result != CommandOutcomeCode::kAccepted) {
         return o;
       }
       // From where the motor is (idle, the bridge was off and it may have moved): no
@@ -198,12 +225,12 @@ CommandOutcome JointApp::ISR_Apply(const Command& c) {
           control_.trajectory().StartStream(from, c.stream_rate);
       if (error != TrajectoryError::kOk) return Invalid(error);
       stream_target_.store(from.raw(), std::memory_order_relaxed);
-      ISR_Enter(AppState::kRunning);
+      ISR_Enter(BoardState::kRunning);
       return {};
     }
     case CommandKind::kStop:
       control_.trajectory().Stop();
-      if (state_ != AppState::kFault) ISR_Enter(AppState::kIdle);
+      if (state_ != BoardState::kFault) ISR_Enter(BoardState::kIdle);
       return {};
     case CommandKind::kClearFaults:
       return {};  // no fault latched: nothing to clear
@@ -216,9 +243,10 @@ void JointApp::ISR_AfterStep() {
     clear_pending_ = false;
     const bool cleared =
         result_.clear == FaultClear::kCleared && result_.raised == Fault::kNone;
-    if (cleared) ISR_Enter(AppState::kIdle);
-    ISR_Done(clear_tag_, cleared ? CommandOutcome{}
-                                 : CommandOutcome{CommandResult::kRefusedFaultActive, 0});
+    if (cleared) ISR_Enter(BoardState::kIdle);
+    ISR_Done(clear_tag_,
+             cleared ? CommandOutcome{}
+                     : CommandOutcome{CommandOutcomeCode::kRefusedFaultActive, 0});
   }
   if (result_.raised != Fault::kNone) {
     AppEvent e;
@@ -226,7 +254,7 @@ void JointApp::ISR_AfterStep() {
     e.tick = result_.telemetry.tick;
     e.fault = result_.raised;
     events_.Push(e);
-    ISR_Enter(AppState::kFault);
+    ISR_Enter(BoardState::kFault);
   }
   if (result_.window_completed) {
     AppEvent e;
@@ -236,8 +264,9 @@ void JointApp::ISR_AfterStep() {
     e.window = result_.window;
     events_.Push(e);
   }
-  const bool moving = state_ == AppState::kRunning || state_ == AppState::kCalibrating;
-  if (moving && result_.telemetry.segment == Segment::kIdle) ISR_Enter(AppState::kIdle);
+  const bool moving =
+      state_ == BoardState::kRunning || state_ == BoardState::kCalibrating;
+  if (moving && result_.telemetry.segment == Segment::kIdle) ISR_Enter(BoardState::kIdle);
 }
 
 }  // namespace mjc::app

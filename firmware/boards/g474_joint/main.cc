@@ -1,22 +1,23 @@
-// The joint board's image: brings the chip up, initialises every driver, and serves the
-// 10 kHz tick and the main loop.
-//
-// The application's composition root (firmware/app: the object that owns the JointApp,
-// the CAN node and the calibration store) plugs in at the two places marked
-// "composition root" below; it is handed the drivers through their interfaces only:
-// hal::JointIo (g_joint_io, the tick), hal::CanPort (g_can) and hal::Flash (the
-// calibration pages of g_flash). Until then the tick samples the sensors and holds the
-// bridge disabled, and the main loop keeps the watchdog and the CAN port serviced.
+// The joint board's image: brings the chip up, initialises every driver, builds the
+// firmware's composition root (app::JointBoard: the application, its CAN node and its
+// calibration store) on them, and serves the 10 kHz tick and the main loop. The board is
+// handed the drivers through their interfaces only: hal::JointIo (g_joint_io, the
+// tick), hal::CanPort (g_can) and hal::Flash (the calibration pages).
 #include <atomic>
 #include <cstdint>
+#include <new>
 
 #include "board.h"
 #include "hal/stm32g4/clock.h"
 #include "hal/stm32g4/gpio.h"
 #include "hal/stm32g4/nvic.h"
 #include "hal/stm32g4/regs/irq.h"
+#include "hal/stm32g4/unique_id.h"
 #include "hal/stm32g4/watchdog.h"
+#include "mjc/app/joint_board.h"
+#include "mjc/app/joint_config.h"
 #include "mjc/boot/handoff.h"
+#include "mjc/build_id.h"
 
 extern "C" {
 // The calibration pages' place in flash (linker/stm32g474.ld).
@@ -43,15 +44,31 @@ std::uint32_t CalibrationPage() {
          static_cast<std::uint32_t>(hal::Flash::kPageSize);
 }
 
-// ---- composition root: the tick ---------------------------------------------------
-// Replaced by the application's `app.ISR_Tick(io)`. Until then: read the sample (so the
-// joint encoder's pipeline and the overrun measurement run) and keep the bridge off.
-template <hal::JointIo Io>
-void Tick(Io& io) {
-  (void)io.ISR_Read();
-  io.ISR_Write(Actuation{});
+// The application's board, built in main() once the drivers are up (placement in CCM
+// SRAM: the tick's hot state, zero wait states), then served by the tick's interrupt.
+alignas(app::JointBoard) __attribute__((section(".ccm_bss.board"))) std::uint8_t
+    g_board_storage[sizeof(app::JointBoard)];
+app::JointBoard* g_board = nullptr;
+
+protocol::ResetCause WireResetCause(stm32g4::ResetCause cause) {
+  switch (cause) {
+    case stm32g4::ResetCause::kPowerOn:
+      return protocol::ResetCause::kPowerOn;
+    case stm32g4::ResetCause::kPin:
+      return protocol::ResetCause::kPin;
+    case stm32g4::ResetCause::kSoftware:
+      return protocol::ResetCause::kSoftware;
+    case stm32g4::ResetCause::kIndependentWatchdog:
+    case stm32g4::ResetCause::kWindowWatchdog:
+      return protocol::ResetCause::kWatchdog;
+    case stm32g4::ResetCause::kLowPower:
+    case stm32g4::ResetCause::kOptionByteLoader:
+      return protocol::ResetCause::kOther;
+    case stm32g4::ResetCause::kUnknown:
+      break;
+  }
+  return protocol::ResetCause::kUnknown;
 }
-// ---- end composition root ----------------------------------------------------------
 
 }  // namespace
 }  // namespace mjc::board
@@ -59,7 +76,7 @@ void Tick(Io& io) {
 void TickInterrupt() {
   using namespace mjc::board;
   g_joint_io.ISR_BeginTick();
-  Tick(g_joint_io);
+  g_board->ISR_Tick(g_joint_io);
   g_ticks.store(g_ticks.load(std::memory_order_relaxed) + 1, std::memory_order_release);
 }
 void CanLine0Interrupt() { mjc::board::g_can.ISR_Line0(); }
@@ -84,18 +101,23 @@ int main() {
   const bool joint_ok = g_joint_io.Init();
   const stm32g4::FdcanResult can_result = g_can.Init(NodeFilters(kNodeId));
 
-  // ---- composition root: construction ----------------------------------------------
-  // The application is built here from: g_joint_io (hal::JointIo), g_can (hal::CanPort),
-  // flash with pages CalibrationPage() and CalibrationPage() + 1 (hal::Flash, for the
-  // CalibrationStore), and the boot facts for its first report: startup.clock,
-  // startup.crashed / crash_exception, reset_cause, flash_ok, joint_ok, can_result.
-  // The motor may run only if startup.clock == ClockResult::kOk.
-  (void)startup;
-  (void)reset_cause;
-  (void)flash_ok;
-  (void)joint_ok;
-  (void)can_result;
-  // ---- end composition root ----------------------------------------------------------
+  // The board. Its first report (BoardInfo) says which build runs and why it started;
+  // the rest of the boot facts keep it from running the motor: a clock that did not
+  // reach 170 MHz, a joint encoder or CAN controller that did not come up.
+  app::JointBoardConfig config{
+      app::DefaultJointConfig(), {}, CalibrationPage(), CalibrationPage() + 1};
+  config.can.node = kNodeId;
+  config.can.identity.build = build::kCommit;
+  config.can.identity.dirty = build::kDirty;
+  config.can.identity.reset_cause = WireResetCause(reset_cause);
+  config.can.identity.instance = stm32g4::UniqueId16();
+  g_board =
+      new (g_board_storage) app::JointBoard(config, &g_can, flash_ok ? &flash : nullptr);
+  (void)g_board->Boot();
+  const bool may_drive = startup.clock == stm32g4::ClockResult::kOk && joint_ok &&
+                         can_result == stm32g4::FdcanResult::kOk;
+  if (!may_drive) g_board->HoldFault(Fault::kBoardStartup);
+  (void)startup.crashed;
 
   // The tick starts last: TIM1 is already counting, its interrupt is enabled now.
   stm32g4::EnableIrq(stm32g4::irq::kTim1Update, stm32g4::kPriorityTick);
@@ -117,14 +139,7 @@ int main() {
       boot::ConfirmHealthyBoot(__boot_handoff);
       confirmed = true;
     }
-    // ---- composition root: the main loop's work ------------------------------------
-    // Replaced by the application's poll (CAN node, events, calibration saves). Until
-    // then the CAN port's queue is emptied and bus-off events taken.
-    protocol::CanFrame frame;
-    while (g_can.Receive(&frame)) {
-    }
-    (void)g_can.TakeBusOff();
-    // ---- end composition root ------------------------------------------------------
+    g_board->Poll();
     // Alive: the LED toggles every 5,000 ticks (1 Hz blink).
     stm32g4::WritePin(kStatusLed, (tick / 5000u) % 2u != 0);
     stm32g4::WaitForInterrupt();

@@ -2,15 +2,16 @@
 
 namespace mjc::sim {
 
-SimBoard::SimBoard(const plant::PlantParams& params, const ControlConfig& config)
-    : tick_hz_(config.tick_hz),
-      period_s_(1.0 / config.tick_hz),
+SimBoard::SimBoard(const plant::PlantParams& params, const app::JointBoardConfig& config,
+                   hal::CanPort* port, hal::Flash* flash)
+    : tick_hz_(config.control.tick_hz),
+      period_s_(1.0 / config.control.tick_hz),
       plant_(std::make_unique<plant::Plant>(params)),
       io_(std::make_unique<hal::SimJointIo>(plant_.get())),
-      app_(std::make_unique<app::JointApp>(config)) {}
+      board_(std::make_unique<app::JointBoard>(config, port, flash)) {}
 
 void SimBoard::Tick() {
-  app_->ISR_Tick(*io_);
+  board_->ISR_Tick(*io_);
   plant_->Step(io_->duty(), io_->bridge_enabled(), period_s_);
 }
 

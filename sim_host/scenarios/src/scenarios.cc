@@ -43,21 +43,6 @@ std::string FaultName(Fault f) { return "fault " + std::to_string(static_cast<in
 
 }  // namespace
 
-ControlConfig DefaultBoardConfig() {
-  ControlConfig c;
-  // Position-loop gains for the Maestro joint plant (sim_host/params: 13.7 Ω, 11.4
-  // mN·m/A, 100:1, 12 V). kff ≈ k_e·N/V_supply cancels the back-EMF at the commanded
-  // velocity; kp and ki hold the tracking error of a 25° 0.5 Hz sine under the interface
-  // load to well under a degree; kd damps the cable pick-up at the dead-band edges.
-  c.position.kp = Fixed<PerRadian, 16>::FromDouble(40.0);
-  c.position.ki = Fixed<PerRadianSecond, 16>::FromDouble(200.0);
-  c.position.kd = Fixed<SecondPerRadian, 16>::FromDouble(0.05);
-  c.position.kff = Fixed<SecondPerRadian, 16>::FromDouble(0.095);
-  c.position.max_duty = Duty::FromDouble(0.9);
-  c.position.integral_limit = Duty::FromDouble(0.5);
-  return c;
-}
-
 SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions) {
   SineConfig s;
   s.amplitude = Angle::Quantize(amplitude_deg * kPi / 180.0);
@@ -73,7 +58,7 @@ CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
   const plant::CableParams& cable = board.plant().params().cable;
   out.true_c_right_rad = cable.c_right_rad;
   out.true_c_left_rad = cable.c_left_rad;
-  if (app.StartCalibrationSweep(sweep).result != app::CommandResult::kAccepted) {
+  if (app.StartCalibrationSweep(sweep).result != app::CommandOutcomeCode::kAccepted) {
     out.message = "the board refused the calibration sweep";
     return out;
   }
@@ -82,7 +67,7 @@ CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
   for (std::uint64_t i = 0; i < 100ull * board.tick_hz() * 60; ++i) {
     board.Tick();
     const Telemetry& t = app.last().telemetry;
-    if (app.state() == app::AppState::kCalibrating) started = true;
+    if (app.state() == app::BoardState::kCalibrating) started = true;
     if (started) {
       motor.push_back(t.motor.ToDouble());
       joint.push_back(t.joint.ToDouble());
@@ -91,11 +76,11 @@ CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
         out.joint_rad.push_back(joint.back());
       }
     }
-    if (app.state() == app::AppState::kFault) {
+    if (app.state() == app::BoardState::kFault) {
       out.message = "the sweep faulted: " + FaultName(app.control().fault());
       return out;
     }
-    if (started && app.state() == app::AppState::kIdle) break;
+    if (started && app.state() == app::BoardState::kIdle) break;
   }
   // The joint trails the cable side by a few ms on the robot alone (the SEA spring
   // against the joint's damping): fit that lag too, or it reads as extra slack.
@@ -117,7 +102,7 @@ CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
                 board_config.joint_encoder.zero_offset};
   const app::CommandOutcome o = app.SetCalibration(out.record);
   board.Tick();
-  out.uploaded = o.result == app::CommandResult::kAccepted && app.calibrated();
+  out.uploaded = o.result == app::CommandOutcomeCode::kAccepted && app.calibrated();
   out.message = out.uploaded ? "uploaded" : "the board refused the calibration";
   return out;
 }
@@ -126,7 +111,7 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
   TrialOutcome out;
   app::JointApp& app = board.app();
   const app::CommandOutcome o = app.StartTrial(sine);
-  if (o.result != app::CommandResult::kAccepted) {
+  if (o.result != app::CommandOutcomeCode::kAccepted) {
     out.faulted = true;
     out.fault =
         "trial refused (result " + std::to_string(static_cast<int>(o.result)) + ")";
@@ -178,9 +163,9 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
         out.fault = FaultName(event.fault);
       }
     }
-    if (app.state() == app::AppState::kRunning) running = true;
+    if (app.state() == app::BoardState::kRunning) running = true;
     if (out.faulted) break;
-    if (running && app.state() == app::AppState::kIdle && ++flush > FlushTicks(board))
+    if (running && app.state() == app::BoardState::kIdle && ++flush > FlushTicks(board))
       break;
   }
   out.ticks = static_cast<std::uint32_t>(truth_power.size());

@@ -96,7 +96,7 @@ MJC_VECTOR_TEST(CanNode, TrialStartedOverCanWithReplyTelemetryAndWindows) {
   const protocol::CommandResult r = Last<protocol::CommandResult>(vt_context, b);
   VT_EXPECT_TRUE(r.outcome == CommandOutcomeCode::kAccepted);
   VT_EXPECT_EQ(r.sequence, 7);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
   b.Run(2999);
   // 3000 ticks: 1 kHz angles every 10 ticks, 10 Hz heartbeat every 1000.
   VT_EXPECT_TRUE(Sent<TelemetryAngles>(b) >= 299 && Sent<TelemetryAngles>(b) <= 301);
@@ -105,7 +105,7 @@ MJC_VECTOR_TEST(CanNode, TrialStartedOverCanWithReplyTelemetryAndWindows) {
   VT_EXPECT_EQ(Sent<WindowHeader>(b), 4u);
   VT_EXPECT_EQ(Sent<WindowEnergy>(b), 4u);
   VT_EXPECT_EQ(Sent<WindowTicks>(b), 4u);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
   VT_EXPECT_EQ(b.node.counters().tx_dropped, 0u);
 }
 
@@ -122,7 +122,7 @@ MJC_VECTOR_TEST(CanNode, TrialRefusedWithoutConfigOrCalibration) {
   b.Run(1);
   VT_EXPECT_TRUE(Last<protocol::CommandResult>(vt_context, b).outcome ==
                  CommandOutcomeCode::kRefusedUncalibrated);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
 }
 
 MJC_VECTOR_TEST(CanNode, MalformedAndForeignFramesAreCountedAndDropped) {
@@ -150,32 +150,32 @@ MJC_VECTOR_TEST(CanNode, SilentStreamStopsTheMotorAndLatches) {
   Calibrate(b);
   b.node.HandleFrame(Encode(Command{CommandCode::kStartStream, 3}, 1));
   b.Run(1);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
   // Setpoints every 5 ms for 0.5 s: healthy.
   for (int i = 0; i < 100; ++i) {
     b.node.HandleFrame(
         Encode(Setpoint{Angle::FromRaw(16777 * i), static_cast<std::uint16_t>(i)}, 1));
     b.Run(50);
   }
-  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
   VT_EXPECT_TRUE(b.io.written.bridge_enabled);
   // Then silence: stopped within the 50 ms timeout plus two ticks, latched.
   int ticks = 0;
-  while (b.app.state() == AppState::kRunning && ticks < 2000) {
+  while (b.app.state() == BoardState::kRunning && ticks < 2000) {
     b.Run(1);
     ++ticks;
   }
   VT_EXPECT_TRUE(ticks <= 500 - 50 + 2);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kFault);
   VT_EXPECT_TRUE(!b.io.written.bridge_enabled);
   VT_EXPECT_TRUE(Last<FaultEvent>(vt_context, b).fault == Fault::kCommandTimeout);
   VT_EXPECT_EQ(b.node.counters().stream_timeouts, 1u);
   b.Run(100);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kFault);
   // Clearing removes the cause and the fault.
   b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 4}, 1));
   b.Run(2);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
 }
 
 MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
@@ -183,7 +183,7 @@ MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kTelemetryAnglesHz, 100}, 1));
   b.Run(1);
   VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOk);
-  VT_EXPECT_EQ(b.node.config().angles_hz, 100);
+  VT_EXPECT_EQ(b.node.config().rates.angles_hz, 100);
   const std::uint32_t before = Sent<TelemetryAngles>(b);
   b.Run(1000);
   VT_EXPECT_TRUE(Sent<TelemetryAngles>(b) - before >= 9 &&
@@ -191,7 +191,7 @@ MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kTelemetryAnglesHz, 20000}, 1));
   b.Run(1);
   VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOutOfRange);
-  VT_EXPECT_EQ(b.node.config().angles_hz, 100);
+  VT_EXPECT_EQ(b.node.config().rates.angles_hz, 100);
   // A control gain: written while idle, refused while running.
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kPositionKp, 40 << 16}, 1));
   b.Run(2);
@@ -248,14 +248,14 @@ MJC_VECTOR_TEST(CanNode, WindowsLongerThanTheWireFieldAreRefused) {
   const protocol::CommandResult r = Last<protocol::CommandResult>(vt_context, b);
   VT_EXPECT_TRUE(r.outcome == CommandOutcomeCode::kRefusedInvalid);
   VT_EXPECT_EQ(r.detail, kDetailWindowTooLong);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
   t.frequency_mHz = 80;  // 6.25 s half-cycles: 62,500 ticks fit
   b.node.HandleFrame(Encode(t, 1));
   b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 21}, 1));
   b.Run(2);
   VT_EXPECT_TRUE(Last<protocol::CommandResult>(vt_context, b).outcome ==
                  CommandOutcomeCode::kAccepted);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
 }
 
 MJC_VECTOR_TEST(CanNode, ParameterWritesKeepTheClockAndTelemetryRunning) {
@@ -301,7 +301,7 @@ MJC_VECTOR_TEST(CanNode, LostHostHeartbeatStopsAMotionButNotARest) {
     b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i), 0x1111}, 1));
     b.Run(1000);
   }
-  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
   b.node.HandleFrame(Encode(Command{CommandCode::kStop, 2}, 1));
   b.Run(2);
   // Session 0x1234's heartbeats every 100 ms keep its trial running...
@@ -310,11 +310,11 @@ MJC_VECTOR_TEST(CanNode, LostHostHeartbeatStopsAMotionButNotARest) {
     b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i), 0x1234}, 1));
     b.Run(1000);
   }
-  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
   // ...and their loss stops it within the 300 ms timeout plus a tick, although another
   // session (a monitor) goes on sending its own.
   int ticks = 0;
-  while (b.app.state() == AppState::kRunning && ticks < 10000) {
+  while (b.app.state() == BoardState::kRunning && ticks < 10000) {
     if (ticks % 1000 == 0) {
       b.node.HandleFrame(
           Encode(HostHeartbeat{static_cast<std::uint8_t>(ticks), 0x4321}, 1));
@@ -323,21 +323,21 @@ MJC_VECTOR_TEST(CanNode, LostHostHeartbeatStopsAMotionButNotARest) {
     ++ticks;
   }
   VT_EXPECT_TRUE(ticks <= 3000 - 1000 + 2);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kFault);
   VT_EXPECT_TRUE(!b.io.written.bridge_enabled);
   VT_EXPECT_TRUE(Last<FaultEvent>(vt_context, b).fault == Fault::kHostHeartbeatLost);
   VT_EXPECT_EQ(b.node.counters().host_timeouts, 1u);
   b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 4}, 1));
   b.Run(2);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
   // A session that goes quiet while the board rests faults nothing, and the next motion
   // (from a tool without a session) is not supervised by the stale one.
   b.node.HandleFrame(Encode(HostHeartbeat{30, 0x1234}, 1));
   b.Run(5000);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
   StartLongTrial(b, 5, 0);
   b.Run(5000);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
   VT_EXPECT_EQ(b.node.counters().host_timeouts, 1u);
   b.node.HandleFrame(Encode(Command{CommandCode::kStop, 6}, 1));
   b.Run(2);
@@ -346,13 +346,13 @@ MJC_VECTOR_TEST(CanNode, LostHostHeartbeatStopsAMotionButNotARest) {
   StartLongTrial(b, 7, 0x1234);
   b.node.HandleFrame(Encode(Command{CommandCode::kStop, 8, 0x1234}, 1));
   b.Run(2);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
   StartLongTrial(b, 9, 0x7777);
   for (int i = 0; i < 10; ++i) {
     b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i), 0x7777}, 1));
     b.Run(1000);
   }
-  VT_EXPECT_TRUE(b.app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
   VT_EXPECT_EQ(b.node.counters().host_timeouts, 1u);
 }
 
@@ -377,11 +377,11 @@ MJC_VECTOR_TEST(CanNode, OneStartAtATimeAwaitsItsVerdict) {
   VT_EXPECT_TRUE(b.results[1].sequence == 1 &&
                  b.results[1].outcome == CommandOutcomeCode::kAccepted);
   // The motion is session 0x1111's: 0x2222's heartbeats do not keep it.
-  for (int i = 0; i < 5 && b.app.state() == AppState::kRunning; ++i) {
+  for (int i = 0; i < 5 && b.app.state() == BoardState::kRunning; ++i) {
     b.node.HandleFrame(Encode(HostHeartbeat{static_cast<std::uint8_t>(i), 0x2222}, 1));
     b.Run(1000);
   }
-  VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kFault);
   VT_EXPECT_EQ(b.node.counters().host_timeouts, 1u);
 }
 
@@ -394,13 +394,13 @@ MJC_VECTOR_TEST(CanNode, BusOffStopsTheMotorInTheNextTickAndIsCounted) {
   b.node.OnBusOff();
   b.Run(1);
   VT_EXPECT_TRUE(!b.io.written.bridge_enabled);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kFault);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kFault);
   VT_EXPECT_TRUE(Last<FaultEvent>(vt_context, b).fault == Fault::kCanBusOff);
   VT_EXPECT_EQ(b.node.counters().bus_off, 1u);
   // The bus is back: the host's clear is accepted.
   b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 2}, 1));
   b.Run(2);
-  VT_EXPECT_TRUE(b.app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
 }
 
 MJC_VECTOR_TEST(CanNode, TellsWhoItIsAtStartAndOnceASecond) {

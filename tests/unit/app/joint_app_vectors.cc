@@ -52,14 +52,14 @@ MJC_VECTOR_TEST(JointApp, TrialRefusedUntilCalibrated) {
   MJC_FRESH_APP(app);
   ScriptedIo io;
   VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result ==
-                 CommandResult::kRefusedUncalibrated);
+                 CommandOutcomeCode::kRefusedUncalibrated);
   VT_EXPECT_TRUE(app.SetCalibration(TestCalibration()).result ==
-                 CommandResult::kAccepted);
+                 CommandOutcomeCode::kAccepted);
   app.ISR_Tick(io);
   VT_EXPECT_TRUE(app.calibrated());
-  VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result == CommandResult::kAccepted);
+  VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result == CommandOutcomeCode::kAccepted);
   app.ISR_Tick(io);
-  VT_EXPECT_TRUE(app.state() == AppState::kRunning);
+  VT_EXPECT_TRUE(app.state() == BoardState::kRunning);
   VT_EXPECT_TRUE(io.written.bridge_enabled);
 }
 
@@ -71,17 +71,17 @@ MJC_VECTOR_TEST(JointApp, InvalidCalibrationRefusedWithReasonOldKept) {
   mjc::Calibration bad = TestCalibration();
   bad.backlash.c_left = Angle::FromDouble(0.1);  // left above right
   CommandOutcome o = app.SetCalibration(bad);
-  VT_EXPECT_TRUE(o.result == CommandResult::kRefusedInvalid);
+  VT_EXPECT_TRUE(o.result == CommandOutcomeCode::kRefusedInvalid);
   VT_EXPECT_EQ(o.detail, static_cast<int>(BacklashConfigError::kLeftAboveRight));
   bad = TestCalibration();
   bad.sea_stiffness = Stiffness{};
   o = app.SetCalibration(bad);
-  VT_EXPECT_TRUE(o.result == CommandResult::kRefusedInvalid);
+  VT_EXPECT_TRUE(o.result == CommandOutcomeCode::kRefusedInvalid);
   VT_EXPECT_EQ(o.detail, static_cast<int>(CalibrationError::kStiffness));
   bad = TestCalibration();
   bad.joint_zero_count = kJointCountsPerRev;
   o = app.SetCalibration(bad);
-  VT_EXPECT_TRUE(o.result == CommandResult::kRefusedInvalid);
+  VT_EXPECT_TRUE(o.result == CommandOutcomeCode::kRefusedInvalid);
   VT_EXPECT_EQ(o.detail, static_cast<int>(CalibrationError::kJointZero));
   app.ISR_Tick(io);
   VT_EXPECT_TRUE(app.control().config().backlash.c_left ==
@@ -95,11 +95,11 @@ MJC_VECTOR_TEST(JointApp, TrialRunsToCompletionThenIdles) {
   app.ISR_Tick(io);
   app.StartTrial(ShortSine());
   int running_ticks = 0;
-  for (int i = 0; i < 5000 && (i == 0 || app.state() != AppState::kIdle); ++i) {
+  for (int i = 0; i < 5000 && (i == 0 || app.state() != BoardState::kIdle); ++i) {
     app.ISR_Tick(io);
-    if (app.state() == AppState::kRunning) ++running_ticks;
+    if (app.state() == BoardState::kRunning) ++running_ticks;
   }
-  VT_EXPECT_TRUE(app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(app.state() == BoardState::kIdle);
   VT_EXPECT_TRUE(!io.written.bridge_enabled);
   VT_EXPECT_EQ(running_ticks, 2 * 1000);  // two 10 Hz cycles at 10 kHz
   // Events: running, then idle.
@@ -123,24 +123,25 @@ MJC_VECTOR_TEST(JointApp, FaultStopsBridgeInSameTickAndLatches) {
   app.ISR_Tick(io);
   VT_EXPECT_TRUE(!io.written.bridge_enabled);
   VT_EXPECT_EQ(io.written.duty.raw(), 0);
-  VT_EXPECT_TRUE(app.state() == AppState::kFault);
+  VT_EXPECT_TRUE(app.state() == BoardState::kFault);
   // Refused while the cause is present; accepted when it is gone.
   app.ClearFaults();
   app.ISR_Tick(io);
-  VT_EXPECT_TRUE(app.state() == AppState::kFault);
-  VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result == CommandResult::kRefusedNotIdle);
+  VT_EXPECT_TRUE(app.state() == BoardState::kFault);
+  VT_EXPECT_TRUE(app.StartTrial(ShortSine()).result ==
+                 CommandOutcomeCode::kRefusedNotIdle);
   io.corrupt = false;
   app.ISR_Tick(io);
   app.ClearFaults();
   app.ISR_Tick(io);
-  VT_EXPECT_TRUE(app.state() == AppState::kIdle);
+  VT_EXPECT_TRUE(app.state() == BoardState::kIdle);
   bool saw_fault = false, saw_refusal = false;
   AppEvent e;
   while (app.PopEvent(&e)) {
     if (e.kind == AppEvent::Kind::kFault && e.fault == Fault::kJointParity)
       saw_fault = true;
     if (e.kind == AppEvent::Kind::kCommandDone &&
-        e.outcome.result == CommandResult::kRefusedFaultActive) {
+        e.outcome.result == CommandOutcomeCode::kRefusedFaultActive) {
       saw_refusal = true;
     }
   }
@@ -154,13 +155,14 @@ MJC_VECTOR_TEST(JointApp, ConfigurationRefusedUnlessIdle) {
   app.ISR_Tick(io);
   app.StartTrial(ShortSine());
   app.ISR_Tick(io);
-  VT_EXPECT_TRUE(app.Configure(ControlConfig{}).result == CommandResult::kRefusedNotIdle);
+  VT_EXPECT_TRUE(app.Configure(ControlConfig{}).result ==
+                 CommandOutcomeCode::kRefusedNotIdle);
   VT_EXPECT_TRUE(app.SetCalibration(TestCalibration()).result ==
-                 CommandResult::kRefusedNotIdle);
+                 CommandOutcomeCode::kRefusedNotIdle);
   app.Stop();
   app.ISR_Tick(io);
-  VT_EXPECT_TRUE(app.state() == AppState::kIdle);
-  VT_EXPECT_TRUE(app.Configure(ControlConfig{}).result == CommandResult::kAccepted);
+  VT_EXPECT_TRUE(app.state() == BoardState::kIdle);
+  VT_EXPECT_TRUE(app.Configure(ControlConfig{}).result == CommandOutcomeCode::kAccepted);
 }
 
 // The main loop's copy of what the tick left: the tick interrupting the copy is stood
@@ -202,12 +204,14 @@ MJC_VECTOR_TEST(JointApp, LatestIsWhatTheLastTickLeft) {
     app.ISR_Tick(io);
     VT_EXPECT_TRUE(same());
   }
-  VT_EXPECT_TRUE(app.Latest().bridge_enabled && app.Latest().state == AppState::kRunning);
+  VT_EXPECT_TRUE(app.Latest().bridge_enabled &&
+                 app.Latest().state == BoardState::kRunning);
   VT_EXPECT_EQ(app.Latest().telemetry.tick, 50u);  // the 51st tick: they count from 0
   io.corrupt = true;
   app.ISR_Tick(io);
   VT_EXPECT_TRUE(same());
-  VT_EXPECT_TRUE(app.Latest().state == AppState::kFault && !app.Latest().bridge_enabled);
+  VT_EXPECT_TRUE(app.Latest().state == BoardState::kFault &&
+                 !app.Latest().bridge_enabled);
   VT_EXPECT_TRUE(app.Latest().telemetry.fault == Fault::kJointParity);
 }
 

@@ -29,7 +29,7 @@ TEST(BusLoad, FdFrameFollowsTheFormat) {
 }
 
 TEST(BusLoad, DefaultRatesFitTheBudgetOnFdNotOnClassical) {
-  const app::CanNodeConfig defaults;
+  const protocol::TelemetryRates defaults;
   const auto fd = host::ComputeBusLoad(defaults, 8, BusTiming{true, 1e6, 5e6});
   const auto classic = host::ComputeBusLoad(defaults, 8, BusTiming{false, 1e6, 1e6});
   EXPECT_LE(fd.total_fraction, 0.5);
@@ -44,8 +44,8 @@ TEST(BusLoad, HighestClassicalTelemetryRateByHand) {
   // 71 × 135 µs = 9.585 ms/s; the host's heartbeat to it adds 10 × 85 µs = 0.85 ms/s.
   // Eight boards: 83.48 ms/s, a load of 0.08348. The 50 % budget leaves 0.41652 for
   // angle frames of 8 × 135 µs each: 0.41652 / 1.08e-3 = 385.667 Hz.
-  const double hz =
-      host::MaxTelemetryHz(app::CanNodeConfig{}, 8, BusTiming{false, 1e6, 1e6}, 0.5);
+  const double hz = host::MaxTelemetryHz(protocol::TelemetryRates{}, 8,
+                                         BusTiming{false, 1e6, 1e6}, 0.5);
   EXPECT_NEAR(hz, 0.41652 / 1.08e-3, 1e-9);
 }
 

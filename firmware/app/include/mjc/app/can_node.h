@@ -12,6 +12,7 @@
 #include <array>
 #include <cstdint>
 
+#include "mjc/app/board_clock.h"
 #include "mjc/app/calibration_store.h"
 #include "mjc/app/joint_app.h"
 #include "mjc/app/spsc_queue.h"
@@ -23,17 +24,7 @@ namespace mjc::app {
 
 struct CanNodeConfig {
   std::uint8_t node = 1;  // 1..8
-  // Transmit rates, Hz, 0 = off; each at most the tick rate. Defaults: the angles at
-  // 1 kHz, the rest at 10 Hz, the heartbeat at 10 Hz — eight boards then load CAN FD
-  // 1/5 Mbit/s to 48.5 % with worst-case stuffing, window events and host heartbeats
-  // included (mjc busload). The energy figures need no more: the board integrates
-  // every tick and reports exact window totals.
-  std::uint16_t angles_hz = 1000;
-  std::uint16_t torque_hz = 10;
-  std::uint16_t power_hz = 10;
-  std::uint16_t energy_hz = 10;
-  std::uint16_t control_hz = 10;
-  std::uint16_t heartbeat_hz = 10;
+  protocol::TelemetryRates rates;
   // Streamed setpoints older than this stop the motor (command timeout, latched),
   // [1, 60000] ms. The default stops a motor whose host went quiet within 50.2 ms (the
   // timeout, the main loop's poll, the next tick), under the 100 ms goal for lost
@@ -48,10 +39,9 @@ struct CanNodeConfig {
   std::uint16_t host_timeout_ms = 300;
   // Largest setpoint speed while streaming, rad/s.
   AngularVelocity stream_rate = AngularVelocity::FromDouble(2.0);
-  // Who the board is (BoardInfo): sent at the first poll and then at info_hz. The board
-  // fills in its build, its reset cause and its instance.
+  // Who the board is (BoardInfo): sent at the first poll and then at rates.info_hz. The
+  // board fills in its build, its reset cause and its instance.
   protocol::BoardInfo identity;
-  std::uint16_t info_hz = 1;
 };
 
 struct CanNodeCounters {
@@ -107,25 +97,46 @@ class CanNode {
   // What a command handed to the app came from, for answering its verdict.
   enum class Origin : std::uint8_t { kCommand = 1, kParam = 2, kCalibration = 3 };
 
+  // Request tags: the origin in the top byte; a command's code and sequence, or a
+  // parameter's id, below.
+  static RequestTag Tag(Origin origin, std::uint32_t low) {
+    return (std::uint32_t{static_cast<std::uint8_t>(origin)} << 24) | low;
+  }
+  static Origin OriginOf(RequestTag tag) { return static_cast<Origin>(tag >> 24); }
+
   template <class M>
-  void Send(const M& message);
+  void Send(const M& message) {
+    Push(protocol::Encode(message, config_.node));
+  }
   void Push(const protocol::CanFrame& frame);
+  std::uint32_t tick_hz() const { return app_->config().tick_hz; }
+
+  // Commands and host supervision (can_node.cc).
   void HandleCommand(const protocol::Command& c);
-  void HandleParam(protocol::ParamId id, bool write, std::int32_t value);
-  void HandleIsoTp(const protocol::CanFrame& frame);
-  // Answers a request the app refused at once, or its verdict from the tick.
+  // Answers a request the app refused at once, or (OnVerdict) the tick's verdict on
+  // one it took.
   void Answer(RequestTag tag, const CommandOutcome& outcome);
+  void OnVerdict(const AppEvent& e);
+  void Supervise(const JointApp::Snapshot& last);
+  // Parameters (can_node_params.cc).
+  void HandleParam(protocol::ParamId id, bool write, std::int32_t value);
+  void SendParam(protocol::ParamId id, protocol::ParamStatus status);
+  // Calibration records over ISO-TP (can_node_upload.cc).
+  void HandleIsoTp(const protocol::CanFrame& frame);
+  void PollUpload();
   void AnswerCalibration(const CommandOutcome& outcome);
   void ReplyCalibration(protocol::CalibrationResult result, std::uint8_t detail);
-  void SendParam(protocol::ParamId id, protocol::ParamStatus status);
+  // Reports: app events and telemetry as frames (can_node_reports.cc).
   void SendEvent(const AppEvent& e);
-  void AdvanceClock(std::uint32_t tick);
-  bool Due(std::uint16_t hz, std::uint32_t* next_tick);
+  void SendTelemetry(const JointApp::Snapshot& last);
 
   JointApp* app_;
   CanNodeConfig config_;
   CanNodeCounters counters_;
-  SpscQueue<protocol::CanFrame, 128> tx_;
+  // 64 frames: a pass of the main loop queues at most a window (5 frames), the
+  // telemetry due (7) and a reply to each frame it took (JointBoard::kMostFramesPerPoll).
+  SpscQueue<protocol::CanFrame, 64> tx_;
+  BoardClock clock_;
   protocol::TrialConfig trial_;
   protocol::SweepConfig sweep_;
   bool have_trial_ = false;
@@ -135,14 +146,9 @@ class CanNode {
   bool config_change_pending_ = false;
   // The calibration awaiting the tick's verdict; saved to the store once applied.
   protocol::CalibrationRecord pending_record_;
-  // The board's clock: the tick counter, and milliseconds derived from it exactly.
-  std::uint32_t now_ = 0;
-  std::uint32_t now_ms_ = 0;
-  std::uint32_t ms_remainder_ = 0;  // tick·1000 not yet a whole millisecond, < tick rate
-  std::uint32_t next_angles_ = 0, next_torque_ = 0, next_power_ = 0, next_energy_ = 0,
-                next_control_ = 0, next_heartbeat_ = 0, next_info_ = 0;
   protocol::IsoTpReceiver isotp_;
   CalibrationStore* store_;
+  Cadence angles_, torque_, power_, energy_, control_, heartbeat_, info_;
   // Streaming: the tick of the last setpoint (or of the stream's start).
   std::uint32_t last_setpoint_tick_ = 0;
   // Host supervision. A start command awaiting the tick's verdict, and its session;

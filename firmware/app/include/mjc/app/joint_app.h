@@ -23,28 +23,17 @@
 #include "mjc/app/spsc_queue.h"
 #include "mjc/app/tick_count.h"
 #include "mjc/core/control_tick.h"
+#include "mjc/protocol/states.h"
 
 namespace mjc::app {
 
-enum class AppState : std::uint8_t {
-  kIdle = 0,
-  kCalibrating = 1,
-  kRunning = 2,
-  kFault = 3
-};
-
-// Stable numbers: a command's outcome travels back to the host.
-enum class CommandResult : std::uint8_t {
-  kAccepted = 0,
-  kRefusedNotIdle = 1,       // configuration, calibration and trials need kIdle
-  kRefusedUncalibrated = 2,  // no valid backlash calibration yet
-  kRefusedInvalid = 3,       // the config failed validation (see detail)
-  kRefusedFaultActive = 4,   // ClearFaults while the cause is still present
-  kRefusedBusy = 5,          // the mailbox is full: try again next tick
-};
+// The application's state and a command's outcome are the protocol's (they travel as
+// they are).
+using protocol::BoardState;
+using protocol::CommandOutcomeCode;
 
 struct CommandOutcome {
-  CommandResult result = CommandResult::kAccepted;
+  CommandOutcomeCode result = CommandOutcomeCode::kAccepted;
   std::uint8_t detail = 0;  // the validating module's stable error code, when invalid
 };
 
@@ -60,7 +49,7 @@ struct AppEvent {
   };
   Kind kind = Kind::kStateChanged;
   std::uint32_t tick = 0;
-  AppState state = AppState::kIdle;
+  BoardState state = BoardState::kIdle;
   Fault fault = Fault::kNone;
   RequestTag tag = 0;      // kCommandDone: the command's tag
   CommandOutcome outcome;  // kCommandDone: the tick's verdict
@@ -108,7 +97,15 @@ class JointApp {
   bool PopEvent(AppEvent* out) { return events_.Pop(out); }
   std::uint32_t dropped_events() const { return events_.dropped(); }
 
-  AppState state() const { return state_; }
+  // The configuration in force, as the main loop sees it: a consistent copy of the
+  // tick's, taken again only when the tick has applied a new one (a configuration or a
+  // calibration). Main-loop context.
+  const ControlConfig& config() const;
+
+  // The tick's own state, read in place: for tick context, or when no tick can run
+  // meanwhile (a simulation between ticks, a test). The main loop uses Latest() and
+  // config().
+  BoardState state() const { return state_; }
   bool calibrated() const { return calibrated_; }
   const ControlTick& control() const { return control_; }
 
@@ -116,7 +113,7 @@ class JointApp {
   struct Snapshot {
     Telemetry telemetry;
     bool bridge_enabled = false;
-    AppState state = AppState::kIdle;
+    BoardState state = BoardState::kIdle;
     bool calibrated = false;
   };
   // Copies the last tick's snapshot; the tick may interrupt the copy (TickCount).
@@ -160,18 +157,21 @@ class JointApp {
   };
 
   CommandOutcome Submit(const Command& command);
-  // The checks every start shares: idle, and calibrated unless it is the sweep.
+  // The checks every start shares: idle, and calibrated unless it is the sweep. The
+  // main loop's (on the last tick's snapshot) and the tick's (on its own state).
+  static CommandOutcome CheckStart(bool needs_calibration, BoardState state,
+                                   bool calibrated);
   CommandOutcome CheckStart(bool needs_calibration) const;
   void ISR_ApplyCommand();
   CommandOutcome ISR_Apply(const Command& c);
   void ISR_FollowHost();
   void ISR_AfterStep();
-  void ISR_Enter(AppState next);
+  void ISR_Enter(BoardState next);
   void ISR_Done(RequestTag tag, CommandOutcome outcome);
 
   ControlTick control_;
   TickResult result_;
-  AppState state_ = AppState::kIdle;
+  BoardState state_ = BoardState::kIdle;
   bool calibrated_ = false;
   SpscQueue<Command, 4> commands_;
   SpscQueue<AppEvent, 64> events_;
@@ -182,6 +182,11 @@ class JointApp {
   bool clear_pending_ = false;
   RequestTag clear_tag_ = 0;
   TickCount done_;  // ticks run to their end: Latest's consistent copy
+  // Configurations the tick has applied; the main loop's copy and the count it was
+  // taken at (config()).
+  std::atomic<std::uint32_t> config_generation_{0};
+  mutable ControlConfig main_config_;
+  mutable std::uint32_t main_generation_ = 0;
 };
 
 }  // namespace mjc::app

@@ -30,12 +30,14 @@ enum class Fault : std::uint16_t {
   kCommandTimeout = 301,     // streamed setpoints stopped arriving
   kHostHeartbeatLost = 302,  // the supervising host went quiet during a motion
   kCanBusOff = 303,          // the CAN controller went bus-off: the host cannot stop us
+  kBoardStartup = 304,       // the board did not come up whole (clock, encoder, CAN):
+                             // held for the whole run, never cleared
 };
 
 // The faults the main loop raises (it sees the bus; the tick does not).
 constexpr bool IsExternalFault(Fault f) {
   return f == Fault::kCommandTimeout || f == Fault::kHostHeartbeatLost ||
-         f == Fault::kCanBusOff;
+         f == Fault::kCanBusOff || f == Fault::kBoardStartup;
 }
 
 struct SupervisorConfig {

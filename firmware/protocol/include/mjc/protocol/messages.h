@@ -17,7 +17,9 @@
 #include "mjc/core/quantities.h"
 #include "mjc/core/supervisor.h"
 #include "mjc/core/trajectory.h"
+#include "mjc/protocol/params.h"
 #include "mjc/protocol/signal.h"
+#include "mjc/protocol/states.h"
 
 // Enum values accepted from the bus, in each enum's own namespace (argument-dependent
 // lookup finds them).
@@ -39,6 +41,7 @@ constexpr bool ValidEnumValue(Fault f) {
     case Fault::kCommandTimeout:
     case Fault::kHostHeartbeatLost:
     case Fault::kCanBusOff:
+    case Fault::kBoardStartup:
       return true;
   }
   return false;
@@ -90,15 +93,6 @@ enum class Function : std::uint8_t {
 
 enum class Sender : std::uint8_t { kBoard, kHost };
 
-// The board's state as it travels (equal to mjc::app::AppState, checked there).
-enum class BoardState : std::uint8_t {
-  kIdle = 0,
-  kCalibrating = 1,
-  kRunning = 2,
-  kFault = 3
-};
-constexpr bool ValidEnumValue(BoardState s) { return static_cast<std::uint8_t>(s) <= 3; }
-
 enum class CommandCode : std::uint8_t {
   kStop = 1,
   kClearFaults = 2,
@@ -127,73 +121,6 @@ enum class ResetCause : std::uint8_t {
 };
 constexpr bool ValidEnumValue(ResetCause c) { return static_cast<std::uint8_t>(c) <= 5; }
 
-// A command's outcome (equal to mjc::app::CommandResult, checked there).
-enum class CommandOutcomeCode : std::uint8_t {
-  kAccepted = 0,
-  kRefusedNotIdle = 1,
-  kRefusedUncalibrated = 2,
-  kRefusedInvalid = 3,
-  kRefusedFaultActive = 4,
-  kRefusedBusy = 5,
-};
-constexpr bool ValidEnumValue(CommandOutcomeCode c) {
-  return static_cast<std::uint8_t>(c) <= 5;
-}
-
-// Parameters readable and writable over the bus. Stable numbers.
-enum class ParamId : std::uint16_t {
-  kTelemetryAnglesHz = 0x0100,
-  kTelemetryTorqueHz = 0x0101,
-  kTelemetryPowerHz = 0x0102,
-  kTelemetryEnergyHz = 0x0103,
-  kTelemetryControlHz = 0x0104,
-  kHeartbeatHz = 0x0105,
-  kStreamTimeoutMs = 0x0110,
-  kHostTimeoutMs = 0x0111,  // 0 = host heartbeats not supervised
-  kPositionKp = 0x0200,     // Q16, duty per rad
-  kPositionKi = 0x0201,     // Q16, duty per rad·s
-  kPositionKd = 0x0202,     // Q16, duty per rad/s
-  kPositionKff = 0x0203,    // Q16, duty per rad/s
-  kVelocityWindow = 0x0210,
-  kTorqueMax = 0x0300,  // Q24 N·m
-  // The calibration in force, read-only (uploads go over ISO-TP as a whole record).
-  kCalibrationRight = 0x0400,      // c_r, Q24 rad
-  kCalibrationLeft = 0x0401,       // c_l, Q24 rad
-  kCalibrationAlpha = 0x0402,      // α, Q28
-  kCalibrationStiffness = 0x0403,  // 2kr_j², Q24 N·m/rad
-  kCalibrationJointZero = 0x0404,  // joint encoder zero count
-  kCalibrated = 0x0405,            // 1 once a calibration was accepted
-  // The running image, read-only.
-  kBuildId = 0x0500,  // BoardInfo::build as a signed 32-bit value
-};
-constexpr bool ValidEnumValue(ParamId id) {
-  switch (id) {
-    case ParamId::kTelemetryAnglesHz:
-    case ParamId::kTelemetryTorqueHz:
-    case ParamId::kTelemetryPowerHz:
-    case ParamId::kTelemetryEnergyHz:
-    case ParamId::kTelemetryControlHz:
-    case ParamId::kHeartbeatHz:
-    case ParamId::kStreamTimeoutMs:
-    case ParamId::kHostTimeoutMs:
-    case ParamId::kPositionKp:
-    case ParamId::kPositionKi:
-    case ParamId::kPositionKd:
-    case ParamId::kPositionKff:
-    case ParamId::kVelocityWindow:
-    case ParamId::kTorqueMax:
-    case ParamId::kCalibrationRight:
-    case ParamId::kCalibrationLeft:
-    case ParamId::kCalibrationAlpha:
-    case ParamId::kCalibrationStiffness:
-    case ParamId::kCalibrationJointZero:
-    case ParamId::kCalibrated:
-    case ParamId::kBuildId:
-      return true;
-  }
-  return false;
-}
-
 enum class ParamStatus : std::uint8_t {
   kOk = 0,
   kUnknown = 1,
@@ -203,12 +130,6 @@ enum class ParamStatus : std::uint8_t {
   kRefusedBusy = 5,  // an earlier write or calibration is still being applied: retry
 };
 constexpr bool ValidEnumValue(ParamStatus s) { return static_cast<std::uint8_t>(s) <= 5; }
-
-// The board's clock as the Heartbeat's `tick` counts it: control ticks at the board's
-// 10 kHz (ControlConfig's default; a test in the app checks the two agree). The host
-// measures the board's own progress with it, so its waits follow a board that runs
-// slower than real time (a simulated one on a loaded machine).
-inline constexpr std::uint32_t kBoardTickHz = 10000;
 
 // Energies travel in Q7.24 J (±128 J, 0.06 µJ): a window's energy is millijoules.
 using WireEnergy = Fixed<Joule, 24>;

@@ -11,16 +11,13 @@
 #include <string>
 #include <vector>
 
+#include "mjc/app/joint_config.h"
 #include "mjc/host/calibration_fit.h"
 #include "mjc/host/report.h"
 #include "mjc/plant/params.h"
 #include "mjc/sim/sim_board.h"
 
 namespace mjc::sim {
-
-// The board's configuration for the Maestro joint plant: default signal chain, and
-// position-loop gains tuned on the plant (see DefaultBoardConfig in scenarios.cc).
-ControlConfig DefaultBoardConfig();
 
 // Called with a stage name and the fraction done of the whole run, [0, 1].
 using ProgressFn = std::function<void(const std::string& stage, double fraction)>;

@@ -1,0 +1,81 @@
+// What the board reports: the app's events (command verdicts, faults, state changes,
+// window summaries) as frames, and telemetry, its heartbeat and its BoardInfo at their
+// cadences.
+#include "mjc/app/can_node.h"
+
+namespace mjc::app {
+
+using protocol::WireEnergy;
+
+void CanNode::SendEvent(const AppEvent& e) {
+  switch (e.kind) {
+    case AppEvent::Kind::kFault: {
+      protocol::FaultEvent f;
+      f.fault = e.fault;
+      f.tick = e.tick;
+      f.state = protocol::BoardState::kFault;
+      return Send(f);
+    }
+    case AppEvent::Kind::kCommandDone:
+      return OnVerdict(e);
+    case AppEvent::Kind::kStateChanged:
+      // A motion that ended is nobody's any more.
+      if (e.state == BoardState::kIdle || e.state == BoardState::kFault)
+        motion_session_ = 0;
+      heartbeat_.Now(clock_.ticks());  // tell the host at once
+      return;
+    case AppEvent::Kind::kWindow: {
+      const WindowSummary& w = e.window;
+      protocol::WindowHeader h;
+      h.motion = w.motion;
+      h.repetition = w.repetition;
+      h.eta_valid = w.eta_valid;
+      h.eta_percent = w.eta_percent;
+      Send(h);
+      Send(protocol::WindowEnergy{FixedCast<WireEnergy>(w.loading),
+                                  FixedCast<WireEnergy>(w.unloading)});
+      Send(protocol::WindowWork{FixedCast<WireEnergy>(w.positive_work),
+                                FixedCast<WireEnergy>(w.negative_work)});
+      Send(protocol::WindowPeaks{w.peak_power, w.peak_torque});
+      // Fits: trials and sweeps with longer windows are refused (kDetailWindowTooLong).
+      protocol::WindowTicks t;
+      t.start_tick = w.start_tick;
+      t.peak_offset = static_cast<std::uint16_t>(w.peak_tick - w.start_tick);
+      t.end_offset = static_cast<std::uint16_t>(w.end_tick - w.start_tick);
+      return Send(t);
+    }
+  }
+}
+
+void CanNode::SendTelemetry(const JointApp::Snapshot& last) {
+  const Telemetry& t = last.telemetry;
+  const std::uint32_t now = clock_.ticks();
+  const std::uint32_t hz = tick_hz();
+  if (angles_.Due(now, config_.rates.angles_hz, hz)) {
+    Send(protocol::TelemetryAngles{t.motor, t.joint});
+  }
+  if (torque_.Due(now, config_.rates.torque_hz, hz)) {
+    Send(protocol::TelemetryTorque{t.torque, t.cable_side});
+  }
+  if (power_.Due(now, config_.rates.power_hz, hz)) {
+    Send(protocol::TelemetryPower{t.power, t.joint_velocity});
+  }
+  if (energy_.Due(now, config_.rates.energy_hz, hz)) {
+    Send(protocol::TelemetryEnergy{EnergyScale(hz).ToEnergy(t.energy_sum)});
+  }
+  if (control_.Due(now, config_.rates.control_hz, hz)) {
+    Send(protocol::TelemetryControl{t.setpoint, t.duty, t.segment, last.state});
+  }
+  if (info_.Due(now, config_.rates.info_hz, hz)) Send(config_.identity);
+  if (heartbeat_.Due(now, config_.rates.heartbeat_hz, hz)) {
+    protocol::Heartbeat h;
+    h.state = last.state;
+    h.calibrated = last.calibrated;
+    h.bridge_enabled = last.bridge_enabled;
+    h.fault = t.fault;
+    h.tick = now;
+    Send(h);
+  }
+}
+
+}  // namespace mjc::app

@@ -1,0 +1,48 @@
+#include "mjc/app/joint_board.h"
+
+namespace mjc::app {
+
+JointBoard::JointBoard(const JointBoardConfig& config, hal::CanPort* port,
+                       hal::Flash* flash)
+    : app_(config.control),
+      store_(flash == nullptr ? std::nullopt
+                              : std::optional<CalibrationStore>(
+                                    std::in_place, flash, config.calibration_page_a,
+                                    config.calibration_page_b)),
+      node_(&app_, config.can, store_ ? &*store_ : nullptr),
+      port_(port) {}
+
+std::optional<CalibrationStore::Loaded> JointBoard::Boot() {
+  if (!store_) return std::nullopt;
+  return RestoreCalibration(app_, *store_);
+}
+
+void JointBoard::Poll() {
+  if (held_fault_ != Fault::kNone) app_.RaiseFault(held_fault_);
+  if (port_ != nullptr) {
+    for (std::uint32_t n = port_->TakeBusOff(); n > 0; --n) node_.OnBusOff();
+    protocol::CanFrame frame;
+    for (int i = 0; i < kMostFramesPerPoll && port_->Receive(&frame); ++i) {
+      node_.HandleFrame(frame);
+    }
+  }
+  node_.Poll();
+  if (port_ == nullptr) {
+    protocol::CanFrame dropped;
+    while (node_.PopTx(&dropped)) {
+    }
+    return;
+  }
+  if (holding_) {
+    if (!port_->Send(held_)) return;
+    holding_ = false;
+  }
+  while (node_.PopTx(&held_)) {
+    if (!port_->Send(held_)) {
+      holding_ = true;
+      return;
+    }
+  }
+}
+
+}  // namespace mjc::app

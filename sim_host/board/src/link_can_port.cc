@@ -1,0 +1,46 @@
+#include "mjc/sim/link_can_port.h"
+
+namespace mjc::sim {
+
+bool LinkCanPort::DoSend(const protocol::CanFrame& frame) {
+  std::string why;
+  if (link_->Send(frame, &why)) return true;
+  // The link already waited for room (ENOBUFS): the frame is lost, counted, and the
+  // board goes on, as a controller whose frame never gets on the bus.
+  ++send_failures_;
+  error_ = why;
+  return true;
+}
+
+bool LinkCanPort::DoReceive(protocol::CanFrame* frame) {
+  if (failed_) return false;
+  std::string why;
+  const host::ReceiveResult r = link_->Receive(0, &why);
+  if (r.status == host::ReceiveStatus::kError) {
+    failed_ = true;
+    error_ = why;
+    return false;
+  }
+  if (!r) return false;
+  *frame = r->frame;
+  ++received_;
+  return true;
+}
+
+std::uint32_t LinkCanPort::DoTakeBusOff() {
+  const std::uint64_t now = link_->stats().bus_off;
+  const auto n = static_cast<std::uint32_t>(now - bus_off_seen_);
+  bus_off_seen_ = now;
+  return n;
+}
+
+hal::CanPortCounters LinkCanPort::DoCounters() const {
+  hal::CanPortCounters c;
+  c.received = received_;
+  c.rx_overflow = static_cast<std::uint32_t>(link_->stats().rx_dropped);
+  c.sent = static_cast<std::uint32_t>(link_->stats().sent);
+  c.bus_off = static_cast<std::uint32_t>(link_->stats().bus_off);
+  return c;
+}
+
+}  // namespace mjc::sim
