@@ -104,7 +104,7 @@ check "mjc list --json marks node 2 ambiguous with both instances" \
   jq -se 'map(select(.node == 2))[0] | .ambiguous and (.instances | length) == 2' list2.json
 check "a command on node 2 refuses: exit 7, one line" \
   refuses 7 download.err "$mjc" cal download --iface vcan0 --node 2
-check "  naming both boards, nothing done" grep -q "^mjc cal download: node 2 is answered by two boards (instances .*); nothing was done$" download.err
+check "  naming both boards, nothing done" grep -q "^mjc cal download: node 2 is answered by two boards (.*): give each its own node id; nothing was done$" download.err
 "$mjc" trial --iface vcan0 --node 2 --out amb --no-figure >amb.out 2>amb.err
 status=$?
 check "a trial on node 2 refuses (exit $status)" test "$status" -eq 7
