@@ -34,8 +34,8 @@ TEST(BusScan, CompleteOnceEveryNodeHeardRanABoardInfoPeriodOfItsOwnTime) {
   scan.Handle(Beat(2, 7000));
   scan.Handle(protocol::Encode(protocol::HostHeartbeat{1, 7}, 3));  // a host's: no node
   // A BoardInfo period in ticks, heard in tenths of it.
-  const auto period =
-      static_cast<std::uint32_t>(kBoardInfoPeriod.count()) * protocol::kBoardTickHz / 1000;
+  const auto period = static_cast<std::uint32_t>(kBoardInfoPeriod.count()) *
+                      protocol::kBoardTickHz / 1000;
   for (std::uint32_t t = period / 10; t <= period; t += period / 10) {
     scan.Handle(Beat(1, 50000 + t, true));
     scan.Handle(Beat(2, 7000 + t));
