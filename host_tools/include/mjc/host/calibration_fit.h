@@ -1,5 +1,5 @@
 // Backlash calibration: fits the firmware's play operator (mjc/core/backlash.h, the
-// paper's eq. 4) to a sweep recorded on the robot alone (design.md §5 "Calibration",
+// paper's eq. 4) to a sweep recorded on the robot alone (docs/DESIGN.md §5 "Calibration",
 // the paper's Fig. 7), then converts the fit into the firmware's fixed-point config.
 //
 // The model, in double precision, with the joint's first reading as initial state:
