@@ -88,7 +88,7 @@ TEST(CsvTable, NumbersRoundTripAFloatAndKeepNineDigits) {
   EXPECT_EQ(CsvTable::Number(-2.0), "-2");
   // Nine significant digits identify every float (IEEE 754 single) exactly.
   for (const float f : {3.14159274f, 1e-30f, 16777217.0f, 0.7f}) {
-    EXPECT_EQ(std::strtof(CsvTable::Number(f).c_str(), nullptr), f);
+    EXPECT_EQ(std::strtof(CsvTable::Number(static_cast<double>(f)).c_str(), nullptr), f);
   }
 }
 
