@@ -257,6 +257,11 @@ inline void IdentifyOrThrow(host::BoardClient& board, std::chrono::milliseconds 
   throw Failure(Exit::kNoAnswer, why);
 }
 
+// mjc list's scan and table (or JSON lines) of every board on `iface`. Throws Failure:
+// nothing heard (kNoAnswer), two boards behind one id (kAmbiguous, after the table),
+// the link, a signal.
+void ListBoards(const std::string& iface, int silence_ms, bool json);
+
 void AddSim(CLI::App& app);
 void AddLog(CLI::App& app);
 void AddCal(CLI::App& app);
