@@ -27,7 +27,7 @@ SimFlash::SimFlash(std::uint32_t pages, std::string path, std::string* why)
   }
   const auto size = static_cast<std::size_t>(st.st_size);
   if (size == 0) {  // a new file: the whole chip, erased
-    fd_ = fd;
+    file_.fd = fd;
     Save(0, memory_.size());
     return;
   }
@@ -52,65 +52,37 @@ SimFlash::SimFlash(std::uint32_t pages, std::string path, std::string* why)
     }
     done += static_cast<std::size_t>(n);
   }
-  fd_ = fd;
+  file_.fd = fd;
 }
 
-SimFlash::~SimFlash() {
-  if (fd_ >= 0) ::close(fd_);
+SimFlash::MirrorFile::~MirrorFile() {
+  if (fd >= 0) ::close(fd);
 }
 
-SimFlash::SimFlash(const SimFlash& other)
-    : pages_(other.pages_),
-      memory_(other.memory_),
-      powered_(other.powered_),
-      cut_after_(other.cut_after_),
-      operations_(other.operations_),
-      rng_(other.rng_) {}
-
-SimFlash& SimFlash::operator=(const SimFlash& other) {
-  if (this != &other) {
-    if (fd_ >= 0) ::close(fd_);
-    fd_ = -1;
-    pages_ = other.pages_;
-    memory_ = other.memory_;
-    powered_ = other.powered_;
-    cut_after_ = other.cut_after_;
-    operations_ = other.operations_;
-    rng_ = other.rng_;
+SimFlash::MirrorFile& SimFlash::MirrorFile::operator=(const MirrorFile& other) {
+  if (this != &other && fd >= 0) {
+    ::close(fd);
+    fd = -1;
   }
   return *this;
 }
 
-SimFlash::SimFlash(SimFlash&& other) noexcept
-    : pages_(other.pages_),
-      memory_(std::move(other.memory_)),
-      fd_(std::exchange(other.fd_, -1)),
-      file_errors_(other.file_errors_),
-      powered_(other.powered_),
-      cut_after_(other.cut_after_),
-      operations_(other.operations_),
-      rng_(other.rng_) {}
+SimFlash::MirrorFile::MirrorFile(MirrorFile&& other) noexcept
+    : fd(std::exchange(other.fd, -1)) {}
 
-SimFlash& SimFlash::operator=(SimFlash&& other) noexcept {
+SimFlash::MirrorFile& SimFlash::MirrorFile::operator=(MirrorFile&& other) noexcept {
   if (this != &other) {
-    if (fd_ >= 0) ::close(fd_);
-    pages_ = other.pages_;
-    memory_ = std::move(other.memory_);
-    fd_ = std::exchange(other.fd_, -1);
-    file_errors_ = other.file_errors_;
-    powered_ = other.powered_;
-    cut_after_ = other.cut_after_;
-    operations_ = other.operations_;
-    rng_ = other.rng_;
+    if (fd >= 0) ::close(fd);
+    fd = std::exchange(other.fd, -1);
   }
   return *this;
 }
 
 void SimFlash::Save(std::size_t offset, std::size_t bytes) {
-  if (fd_ < 0) return;
+  if (file_.fd < 0) return;
   while (bytes > 0) {
     const ssize_t n =
-        ::pwrite(fd_, memory_.data() + offset, bytes, static_cast<off_t>(offset));
+        ::pwrite(file_.fd, memory_.data() + offset, bytes, static_cast<off_t>(offset));
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
       ++file_errors_;

@@ -26,17 +26,12 @@ class SimFlash final : public Flash {
   // exists and written back after every operation; a new file is created whole (every
   // byte erased). A file of another size is left untouched and not mirrored (the flash
   // starts erased), with the reason in *why.
+  // A copy holds the same contents in memory only: it never writes the file.
   explicit SimFlash(std::uint32_t pages, std::string path = {},
                     std::string* why = nullptr);
-  ~SimFlash() override;
-  // A copy holds the same contents in memory only: it never writes the file.
-  SimFlash(const SimFlash& other);
-  SimFlash& operator=(const SimFlash& other);
-  SimFlash(SimFlash&& other) noexcept;
-  SimFlash& operator=(SimFlash&& other) noexcept;
 
   // True when a path was given and its file is being kept up to date.
-  bool mirrored() const { return fd_ >= 0; }
+  bool mirrored() const { return file_.fd >= 0; }
   // Writes to the file that failed (a full disk); the contents in memory are right.
   long file_errors() const { return file_errors_; }
 
@@ -62,9 +57,21 @@ class SimFlash final : public Flash {
   // Writes memory [offset, offset + bytes) to the file, when there is one.
   void Save(std::size_t offset, std::size_t bytes);
 
+  // The mirror file, open for writing: closed with its owner, moved with it, never
+  // copied (a copy of the flash is memory only).
+  struct MirrorFile {
+    int fd = -1;
+    MirrorFile() = default;
+    ~MirrorFile();
+    MirrorFile(const MirrorFile&) {}
+    MirrorFile& operator=(const MirrorFile& other);
+    MirrorFile(MirrorFile&& other) noexcept;
+    MirrorFile& operator=(MirrorFile&& other) noexcept;
+  };
+
   std::uint32_t pages_;
   std::vector<std::uint8_t> memory_;
-  int fd_ = -1;  // the mirror file, open for writing
+  MirrorFile file_;
   long file_errors_ = 0;
   bool powered_ = true;
   long cut_after_ = -1;
