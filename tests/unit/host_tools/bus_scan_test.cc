@@ -94,16 +94,18 @@ protocol::CanFrame Status(std::uint8_t node, std::uint32_t tick_ms) {
 
 TEST(BusScan, ABootloaderIsShownAfterASecondAndATenthOfItsClock) {
   // It sends its BoardInfo once a second, its BootStatus (with its clock) ten times.
+  // Heard first between two of its BoardInfo frames.
   BusScan scan;
+  for (std::uint32_t ms = 0; ms <= 500; ms += 100) scan.Handle(Status(5, 300 + ms));
+  EXPECT_FALSE(scan.Complete());
   protocol::BoardInfo info;
   info.image = protocol::ImageKind::kBootloader;
   info.build = 0xb0071234;
   info.instance = 0x5151;
   scan.Handle(protocol::Encode(info, 5));
-  for (std::uint32_t ms = 0; ms <= 1000; ms += 100) scan.Handle(Status(5, 30 + ms));
-  EXPECT_FALSE(scan.Complete());  // a second: another board may not have spoken yet
-  scan.Handle(Status(5, 30 + 1100));
-  scan.Handle(Status(5, 30 + 1200));
+  for (std::uint32_t ms = 600; ms <= 1000; ms += 100) scan.Handle(Status(5, 300 + ms));
+  EXPECT_FALSE(scan.Complete());  // a second: a second board may not have spoken yet
+  scan.Handle(Status(5, 300 + 1100));
   EXPECT_TRUE(scan.Complete());
   const ScannedNode& n = scan.nodes().at(5);
   EXPECT_TRUE(n.in_bootloader());

@@ -22,6 +22,8 @@ struct ScannedNode {
   // The last BootStatus: the node runs its bootloader when its last BoardInfo says so
   // (in_bootloader()).
   std::optional<protocol::BootStatus> boot_status;
+  // Its clock was last read from a BootStatus (a bootloader's), not a heartbeat.
+  bool bootloader_clock = false;
   int infos = 0;             // BoardInfo frames heard
   std::uint64_t frames = 0;  // frames the node sent
   // It has shown every board behind its id: its clock advanced 1.1 BoardInfo periods
