@@ -215,6 +215,8 @@ void FirmwareUpdate::Handle(const CanFrame& f) {
     case Function::kBootStatus: {
       BootStatus s;
       if (Decode(f, &s) != DecodeError::kOk) return;
+      // Its clock starts anew at every start of the bootloader.
+      if (last_boot_ms_ && s.tick_ms < *last_boot_ms_) ++bootloader_starts_;
       advance(last_boot_ms_, s.tick_ms);
       last_app_ms_.reset();
       status_ = s;
@@ -237,11 +239,7 @@ void FirmwareUpdate::Handle(const CanFrame& f) {
       if (Decode(f, &i) != DecodeError::kOk) return;
       info_ = i;
       in_bootloader_ = i.image == ImageKind::kBootloader;
-      if (in_bootloader_) {
-        ++bootloader_starts_;  // it sends one at its start, then one a second
-      } else {
-        status_.reset();
-      }
+      if (!in_bootloader_) status_.reset();
       return;
     }
     case Function::kBootResult: {
@@ -612,7 +610,8 @@ FirmwareUpdate::Step FirmwareUpdate::StartImage(UpdateResult* r, bool new_image)
                            std::string(BootErrorName(answer->error)) + ")");
   }
   // It resets 20 ms later: its bootloader starts anew (a BoardInfo, then BootStatus in
-  // the hold window), then hands over, and the application sends its BoardInfo.
+  // the hold window, its clock from 0), then hands over, and the application sends its
+  // BoardInfo. A BootStatus of that new start that says it stays ends the wait.
   const std::uint64_t starts = bootloader_starts_;
   info_.reset();
   const auto started = [&] { return info_ && info_->image == ImageKind::kApplication; };

@@ -226,7 +226,7 @@ class FirmwareUpdate {
   std::optional<protocol::BootResult> result_;
   std::optional<protocol::BoardInfo> info_;
   bool in_bootloader_ = false;           // which image spoke last
-  std::uint64_t bootloader_starts_ = 0;  // BoardInfo frames of its bootloader
+  std::uint64_t bootloader_starts_ = 0;  // its BootStatus clock went back to a new start
   std::uint64_t frames_ = 0;
   std::uint64_t statuses_ = 0;
   std::uint64_t heartbeats_ = 0;
