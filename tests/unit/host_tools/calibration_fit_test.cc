@@ -355,6 +355,27 @@ TEST(BacklashFitRefuses, OffsetsBeyondTheLegalRange) {
   ExpectRefused(Fit(sweep), "legal bound");
 }
 
+TEST(BacklashFitRefuses, AResidualFarAboveTheEncodersResolution) {
+  // The pulleys are 1.3:1 but the fit is told 1:1 (a wrong robot description): the best
+  // play operator misses the joint by degrees at the sweep's peaks, far above the
+  // limit of ten joint-encoder counts.
+  const Sweep sweep = MakeSweep({1.0, -1.0, 1.3}, 1000.0, Sensors::kRealistic);
+  const BacklashFit fit = Fit(sweep);
+  ExpectRefused(fit, "above the limit");
+  EXPECT_GT(fit.rms_error_rad, 10 * kJointLsbRad);
+  EXPECT_NE(fit.message.find("max_rms_error_rad"), std::string::npos) << fit.message;
+  std::string why;
+  EXPECT_FALSE(ToFirmwareConfig(fit, &why).has_value()) << "never uploaded";
+}
+
+TEST(BacklashFit, ARealisticSweepIsWellInsideTheResidualLimit) {
+  // Quantisation and noise of the realistic sensors: about a count, a tenth of the limit.
+  const Sweep sweep = MakeSweep({1.0, -1.0}, 1000.0, Sensors::kRealistic);
+  const BacklashFit fit = Fit(sweep);
+  ASSERT_EQ(fit.status, BacklashFitStatus::kConverged) << fit.message;
+  EXPECT_LT(fit.rms_error_rad, 2 * kJointLsbRad);
+}
+
 TEST(BacklashFitRefuses, AlphaOnItsSearchBound) {
   const Sweep sweep = MakeSweep({1.0, -1.0, 1.3}, 1000.0, Sensors::kRealistic);
   BacklashFitOptions options;
@@ -383,6 +404,9 @@ TEST(BacklashFitRefuses, BadOptions) {
   options = {};
   options.min_engaged_fraction = 0.0;
   ExpectRefused(Fit(sweep, options), "min_engaged_fraction");
+  options = {};
+  options.max_rms_error_rad = 0.0;
+  ExpectRefused(Fit(sweep, options), "max_rms_error_rad must be finite and > 0");
 }
 
 // ---------------------------------------------------------------------------------
