@@ -77,8 +77,7 @@ void CanNode::HandleFrame(const CanFrame& frame) {
     return false;
   };
   // Every node's, ahead of the node filter: the emergency stop.
-  if (frame.id <= 0x7FFu &&
-      protocol::FunctionOf(frame.id) == static_cast<std::uint8_t>(Function::kStopAll)) {
+  if (frame.id == protocol::IdOf<protocol::StopAll>(protocol::kEveryNode)) {
     protocol::StopAll s;
     DecodeError e = Decode(frame, &s);
     // Another protocol's frame on identifier 0 (a wrong key) is no stop.
@@ -128,6 +127,11 @@ void CanNode::HandleFrame(const CanFrame& frame) {
     case Function::kIsoTpToBoard:
       HandleIsoTp(frame);
       return;
+    case Function::kStopAll: {  // addressed to one node: no broadcast, refused
+      protocol::StopAll s;
+      (void)count(Decode(frame, &s));
+      return;
+    }
     case Function::kHostHeartbeat: {
       protocol::HostHeartbeat h;
       // Only the heartbeat of the session that started the motion keeps it going.
