@@ -89,8 +89,9 @@ void EmergencyStopThread::Run() {
   while (step != EmergencyStopWatch::Step::kError) {
     activations_ = watch_.activations();
     if (step == EmergencyStopWatch::Step::kSent && !triggered_) {
-      triggered_ = true;
+      // The flag first: whoever sees triggered() sees the tool's waits ended too.
       if (raise_ != nullptr) *raise_ = true;
+      triggered_ = true;
     }
     if (quit_) return;
     step = watch_.Poll(kWait, &why);
@@ -104,8 +105,9 @@ void EmergencyStopThread::Run() {
     std::lock_guard<std::mutex> lock(mutex_);
     error_ = why;
   }
-  triggered_ = true;
+  // After the reason: whoever sees triggered() can tell a failure from a press.
   if (raise_ != nullptr) *raise_ = true;
+  triggered_ = true;
 }
 
 }  // namespace mjc::host
