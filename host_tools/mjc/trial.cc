@@ -156,6 +156,14 @@ void AddTrial(CLI::App& app) {
     // The emergency-stop watch, from before anything moves to the end of the run.
     std::unique_ptr<host::EmergencyStopThread> estop;
     const auto stopped_by_estop = [&] { return estop && estop->triggered(); };
+    // The run ended by the emergency stop: "emergency_stop" in run.json, exit 6.
+    const auto estop_end = [&](const std::string& what) {
+      EndProgress();
+      record.end.outcome = "emergency_stop";
+      record.end.message = what;
+      host::WriteRunRecord(record, dir);
+      return Failure(Exit::kStopped, what);
+    };
     try {
       if (const auto spec = LineOf(sync_name)) {
         gpio::LineOptions options;
@@ -202,6 +210,10 @@ void AddTrial(CLI::App& app) {
                        plan.size());
           std::string line;
           const bool answered = static_cast<bool>(std::getline(std::cin, line));
+          if (stopped_by_estop()) {
+            throw estop_end(EstopWhat(*estop) + " during the pause before trial " +
+                            std::to_string(t + 1) + "; earlier trials are in " + saved);
+          }
           if (interrupted || !answered) {
             throw end(Exit::kStopped,
                       std::string(interrupted ? "interrupted"
@@ -246,10 +258,7 @@ void AddTrial(CLI::App& app) {
           for (const host::TrialWindows& r : runs) windows += r.windows.size();
           const std::string kept = std::to_string(windows) + " windows saved to " + saved;
           if (stopped_by_estop()) {
-            record.end.outcome = "emergency_stop";
-            record.end.message = ConfirmEmergencyStop(board, *estop) + "; " + kept;
-            host::WriteRunRecord(record, dir);
-            throw Failure(Exit::kStopped, record.end.message);
+            throw estop_end(ConfirmEmergencyStop(board, *estop) + "; " + kept);
           }
           if (trial.end == host::TrialEnd::kInterrupted) {
             throw end(Exit::kStopped, "interrupted: " + stopped + "; " + kept);
@@ -291,10 +300,7 @@ void AddTrial(CLI::App& app) {
       // Stopped before the first trial moved (the button pressed at the start, or while
       // the board was asked who it is).
       if (record.end.outcome == "running" && stopped_by_estop()) {
-        record.end.outcome = "emergency_stop";
-        record.end.message = EstopWhat(*estop) + "; " + f.what();
-        host::WriteRunRecord(record, dir);
-        throw Failure(Exit::kStopped, record.end.message);
+        throw estop_end(EstopWhat(*estop) + "; " + f.what());
       }
       if (record.end.outcome == "running") throw end(f.exit(), f.what());
       throw;
