@@ -76,7 +76,7 @@ void AddCalibrate(CLI::App& app) {
       ->check(InRange(2, 255))
       ->capture_default_str();
   AddOutputOptions(cmd, &output, "out/calibration");
-  AddEstopOptions(cmd, &estop_options, true);
+  AddEstopOptions(cmd, &estop_options, EstopDefault::kConfig);
   cmd->add_flag("!--no-upload", upload, "Fit and save only");
   cmd->callback([] {
     host::OutputFolder folder;

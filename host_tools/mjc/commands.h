@@ -49,12 +49,12 @@ enum class Exit : int {
 // The footer of every --help.
 inline constexpr const char* kExitStatusHelp =
     "Exit status: 0 done; 1 failed on this side (input or output file, interface, "
-    "link, unusable fit, gnuplot); 2 bad command line; 3 a node did not answer, went "
-    "silent or did not finish in time; 4 the board refused, holds no calibration or "
-    "did not keep what was sent; 5 the board faulted; 6 the motion was stopped before "
-    "its end (interrupted: the board was stopped and what arrived is saved; or stopped "
-    "by another tool); 7 two boards answer with one node id (nothing was done to it; "
-    "give each board its own id).\n"
+    "link, GPIO line, unusable fit, gnuplot); 2 bad command line; 3 a node did not "
+    "answer, went silent or did not finish in time; 4 the board refused, holds no "
+    "calibration or did not keep what was sent; 5 the board faulted; 6 the motion was "
+    "stopped before its end (interrupted: the board was stopped and what arrived is "
+    "saved; stopped by another tool; or by the emergency stop); 7 two boards answer "
+    "with one node id (nothing was done to it; give each board its own id).\n"
     "Defaults: --iface from MJC_IFACE, else the config file's \"iface\", else vcan0; "
     "--node from its \"node\", else 1; GPIO lines (CHIP:LINE) from its \"estop_line\", "
     "\"estop_active\", \"sync_line\" and \"reset_lines\". The config file is "
@@ -285,15 +285,19 @@ inline std::optional<gpio::LineSpec> LineOf(const std::string& value) {
 }
 
 // --estop-line and --estop-active: the emergency-stop button a command watches while
-// it runs. `from_config`: the config file's "estop_line" is the default (mjc estop,
-// trial, calibrate), else the line is watched only when given (monitor).
+// it runs. kConfig: the config file's "estop_line" is the default ("none" leaves it
+// unwatched: trial, calibrate); kGiven: watched only when given (monitor). mjc estop
+// names its option --line (kConfig; "none" means nothing there).
+enum class EstopDefault : std::uint8_t { kConfig, kGiven };
 struct EstopOptions {
   std::string line;
   std::string active = "high";
 };
-inline void AddEstopOptions(CLI::App* cmd, EstopOptions* options, bool from_config,
+inline void AddEstopOptions(CLI::App* cmd, EstopOptions* options, EstopDefault from,
                             const char* name = "--estop-line") {
   const host::ToolConfig& config = Defaults();
+  const bool from_config = from == EstopDefault::kConfig;
+  const bool none = from_config && std::string_view(name) == "--estop-line";
   if (from_config && config.estop_line) options->line = config.estop_line->text();
   if (config.estop_active_low)
     options->active = *config.estop_active_low ? "low" : "high";
@@ -301,8 +305,8 @@ inline void AddEstopOptions(CLI::App* cmd, EstopOptions* options, bool from_conf
                   std::string("Emergency-stop input CHIP:LINE (a chip's name, path, "
                               "label or number; a line's offset or name): its edge into "
                               "the active level sends StopAll to every node at once") +
-                      (from_config ? "; none: not watched" : ""))
-      ->check(LineSpecCheck(from_config))
+                      (none ? "; none: not watched" : ""))
+      ->check(LineSpecCheck(none))
       ->capture_default_str();
   cmd->add_option("--estop-active", options->active,
                   "The emergency-stop line's active level (pressed, or a broken wire)")

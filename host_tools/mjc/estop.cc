@@ -43,7 +43,7 @@ void AddEstop(CLI::App& app) {
   static std::string iface;
   static EstopOptions options;
   AddIfaceOption(cmd, &iface);
-  AddEstopOptions(cmd, &options, true, "--line");
+  AddEstopOptions(cmd, &options, EstopDefault::kConfig, "--line");
   cmd->callback([] {
     const auto spec = LineOf(options.line);
     if (!spec) {

@@ -57,7 +57,7 @@ void AddMonitor(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--json", json, "One JSON object per node (and bus report) and line");
   // Watched only when given: a monitor runs beside a trial, which may watch it.
-  AddEstopOptions(cmd, &estop_options, false);
+  AddEstopOptions(cmd, &estop_options, EstopDefault::kGiven);
   cmd->callback([] {
     // A link per node: each client filters its link to its own node.
     std::vector<std::unique_ptr<host::SocketCanLink>> links;

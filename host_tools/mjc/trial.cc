@@ -91,7 +91,7 @@ void AddTrial(CLI::App& app) {
   cmd->add_flag("--pause", pause, "Wait for Enter between trials (re-donning)");
   AddOutputOptions(cmd, &output, "out/trial");
   cmd->add_flag("!--no-figure", figure, "Tables and windows.csv only (no gnuplot)");
-  AddEstopOptions(cmd, &estop_options, true);
+  AddEstopOptions(cmd, &estop_options, EstopDefault::kConfig);
   if (Defaults().sync_line) sync_name = Defaults().sync_line->text();
   cmd->add_option("--sync-line", sync_name,
                   "Trigger output CHIP:LINE for other instruments: high during flexion "
