@@ -268,5 +268,6 @@ void AddMonitor(CLI::App& app);
 void AddClear(CLI::App& app);
 void AddStop(CLI::App& app);
 void AddList(CLI::App& app);
+void AddParam(CLI::App& app);
 
 }  // namespace mjc::cli

@@ -182,28 +182,41 @@ std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int tim
   return std::nullopt;
 }
 
-std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
-                                                   std::string* why) {
+template <class Request>
+std::optional<ParamValue> BoardClient::AskParam(const Request& request, ParamId id,
+                                                int timeout_ms, const char* what,
+                                                std::string* why) {
   last_param_.reset();
-  if (!Send(ParamRead{id}, why)) return std::nullopt;
+  if (!Send(request, why)) return std::nullopt;
   const auto answered = [&] { return last_param_ && last_param_->id == id; };
   const std::chrono::milliseconds timeout{timeout_ms};
   WaitEnd end{};
   if (!Await(answered, {timeout, timeout}, &end, why)) {
     if (end == WaitEnd::kBoardTime) {
-      *why = "node " + std::to_string(node_) +
-             " talks but did not answer a parameter read within " +
-             std::to_string(timeout_ms) + " ms of its own time";
+      *why = "node " + std::to_string(node_) + " talks but did not answer " + what +
+             " within " + std::to_string(timeout_ms) + " ms of its own time";
     }
     return std::nullopt;
   }
-  if (last_param_->status != ParamStatus::kOk) {
+  return last_param_;
+}
+
+std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
+                                                   std::string* why) {
+  const auto answer = AskParam(ParamRead{id}, id, timeout_ms, "a parameter read", why);
+  if (!answer) return std::nullopt;
+  if (answer->status != ParamStatus::kOk) {
     *why = "node " + std::to_string(node_) + " answered parameter " +
            std::to_string(static_cast<int>(id)) + " with status " +
-           std::to_string(static_cast<int>(last_param_->status));
+           std::to_string(static_cast<int>(answer->status));
     return std::nullopt;
   }
-  return last_param_->value;
+  return answer->value;
+}
+
+std::optional<ParamValue> BoardClient::WriteParam(ParamId id, std::int32_t raw,
+                                                  int timeout_ms, std::string* why) {
+  return AskParam(ParamWrite{id, raw}, id, timeout_ms, "a parameter write", why);
 }
 
 bool BoardClient::Poll(int timeout_ms, std::string* why) {

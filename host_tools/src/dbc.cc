@@ -66,7 +66,8 @@ void AddParamNames(std::string& out, std::uint8_t node) {
 }  // namespace
 
 std::string GenerateDbc() {
-  std::string out = "VERSION \"maestro-jc protocol 1\"\n\nNS_ :\n\nBS_:\n\nBU_: Host";
+  std::string out = "VERSION \"maestro-jc protocol " + std::to_string(kVersion) +
+                    "\"\n\nNS_ :\n\nBS_:\n\nBU_: Host";
   for (std::uint8_t n = kMinNode; n <= kMaxNode; ++n) out += " " + NodeName(n);
   out += "\n\n";
   for (std::uint8_t n = kMinNode; n <= kMaxNode; ++n) {

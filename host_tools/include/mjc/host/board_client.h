@@ -173,6 +173,13 @@ class BoardClient {
   std::optional<std::int32_t> ReadParam(protocol::ParamId id, int timeout_ms,
                                         std::string* why);
 
+  // Writes a parameter's raw value and waits for the board's answer (timeout_ms as for
+  // Command; a control parameter is answered once the tick has applied or refused it):
+  // its status, and the value it holds now. nullopt when it cannot be sent or is not
+  // answered (then *why says which).
+  std::optional<protocol::ParamValue> WriteParam(protocol::ParamId id, std::int32_t raw,
+                                                 int timeout_ms, std::string* why);
+
   // Handles what arrives within timeout_ms: returns once something has, or at the
   // timeout, sending heartbeats meanwhile when they are on. False only when the link
   // failed (then *why says how); a quiet bus is not a failure.
@@ -252,6 +259,12 @@ class BoardClient {
   bool Beat(std::string* why);
   // Calls the bus-off handler when the link counted new bus-off reports.
   void NoteBusOff();
+  // Sends `request` (a ParamRead or ParamWrite of `id`) and waits for the ParamValue of
+  // `id`; `what` names the request in the timeout's message ("a parameter read").
+  template <class Request>
+  std::optional<protocol::ParamValue> AskParam(const Request& request,
+                                               protocol::ParamId id, int timeout_ms,
+                                               const char* what, std::string* why);
 
   CanLink* link_;
   std::uint8_t node_;
