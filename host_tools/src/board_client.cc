@@ -11,7 +11,23 @@
 
 namespace mjc::host {
 
-using namespace mjc::protocol;
+using protocol::BoardInfo;
+using protocol::BoardState;
+using protocol::CanFrame;
+using protocol::CommandCode;
+using protocol::CommandOutcomeCode;
+using protocol::DecodeError;
+using protocol::Function;
+using protocol::FunctionOf;
+using protocol::HostHeartbeat;
+using protocol::NodeOf;
+using protocol::ParamId;
+using protocol::ParamRead;
+using protocol::ParamStatus;
+using protocol::ParamValue;
+using protocol::ParamWrite;
+using protocol::SentByBoard;
+using protocol::SessionId;
 
 void BoardIdentity::OnInfo(const BoardInfo& info) {
   info_since_heartbeat_ = true;
@@ -150,6 +166,17 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
                                             " ms (is its HeartbeatHz 0?)");
     }
   }
+}
+
+bool BoardClient::AwaitMotionEnd(BoardState motion, const std::function<void()>& each,
+                                 const Patience& patience, WaitEnd* end,
+                                 std::string* why) {
+  MotionEnd follow(motion);
+  const auto over = [&] {
+    if (each) each();
+    return follow.Over(status_.state);
+  };
+  return Await(over, patience, end, why);
 }
 
 bool BoardClient::Identify(WaitEnd* end, std::string* why,
@@ -316,7 +343,7 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kHeartbeat: {
-      Heartbeat h;
+      protocol::Heartbeat h;
       if (!ok(Decode(f, &h))) return;
       identity_.OnHeartbeat(h.tick);
       ++heartbeats_heard_;
@@ -328,7 +355,7 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kFault: {
-      FaultEvent e;
+      protocol::FaultEvent e;
       if (ok(Decode(f, &e))) {
         status_.fault = e.fault;
         status_.state = BoardState::kFault;
@@ -336,7 +363,7 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kTelemetryAngles: {
-      TelemetryAngles a;
+      protocol::TelemetryAngles a;
       if (ok(Decode(f, &a))) {
         status_.motor_rad = a.motor.ToDouble();
         status_.joint_rad = a.joint.ToDouble();
@@ -345,23 +372,23 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kTelemetryTorque: {
-      TelemetryTorque t;
+      protocol::TelemetryTorque t;
       if (ok(Decode(f, &t))) status_.torque_Nm = t.torque.ToDouble();
       return;
     }
     case Function::kTelemetryPower: {
-      TelemetryPower p;
+      protocol::TelemetryPower p;
       if (ok(Decode(f, &p))) status_.power_W = p.power.ToDouble();
       return;
     }
     case Function::kTelemetryEnergy: {
-      TelemetryEnergy e;
+      protocol::TelemetryEnergy e;
       if (ok(Decode(f, &e))) status_.energy_J = e.energy.ToDouble();
       return;
     }
     // A window travels as five frames (see AcceptWindowPart).
     case Function::kWindowHeader: {
-      WindowHeader h;
+      protocol::WindowHeader h;
       if (!ok(Decode(f, &h)) || !AcceptWindowPart(0)) return;
       partial_.motion = h.motion;
       partial_.repetition = h.repetition;
@@ -370,28 +397,28 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kWindowEnergy: {
-      WindowEnergy e;
+      protocol::WindowEnergy e;
       if (!ok(Decode(f, &e)) || !AcceptWindowPart(1)) return;
       partial_.loading_J = e.loading.ToDouble();
       partial_.unloading_J = e.unloading.ToDouble();
       return;
     }
     case Function::kWindowWork: {
-      WindowWork w;
+      protocol::WindowWork w;
       if (!ok(Decode(f, &w)) || !AcceptWindowPart(2)) return;
       partial_.positive_J = w.positive.ToDouble();
       partial_.negative_J = w.negative.ToDouble();
       return;
     }
     case Function::kWindowPeaks: {
-      WindowPeaks p;
+      protocol::WindowPeaks p;
       if (!ok(Decode(f, &p)) || !AcceptWindowPart(3)) return;
       partial_.peak_power_W = p.peak_power.ToDouble();
       partial_.peak_torque_Nm = p.peak_torque.ToDouble();
       return;
     }
     case Function::kWindowTicks: {
-      WindowTicks t;
+      protocol::WindowTicks t;
       if (!ok(Decode(f, &t)) || !AcceptWindowPart(4)) return;
       partial_.start_tick = t.start_tick;
       partial_.peak_tick = t.start_tick + t.peak_offset;

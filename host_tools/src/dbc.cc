@@ -12,7 +12,12 @@
 namespace mjc::host {
 namespace {
 
-using namespace mjc::protocol;
+using protocol::AllMessages;
+using protocol::IdOf;
+using protocol::kMaxNode;
+using protocol::kMinNode;
+using protocol::Message;
+using protocol::Sender;
 
 std::string Num(double v) {
   char text[40];
@@ -53,10 +58,11 @@ void AddMessage(std::string& out, std::uint8_t node) {
 // The parameter ids' names, from the protocol's list, on every message that carries one.
 template <class M>
 void AddParamNames(std::string& out, std::uint8_t node) {
-  if constexpr (std::is_same_v<M, ParamRead> || std::is_same_v<M, ParamWrite> ||
-                std::is_same_v<M, ParamValue>) {
+  if constexpr (std::is_same_v<M, protocol::ParamRead> ||
+                std::is_same_v<M, protocol::ParamWrite> ||
+                std::is_same_v<M, protocol::ParamValue>) {
     out += "VAL_ " + std::to_string(IdOf<M>(node)) + " param";
-    for (const ParamInfo& p : kParams) {
+    for (const protocol::ParamInfo& p : protocol::kParams) {
       out += " " + std::to_string(static_cast<int>(p.id)) + " \"" + p.key + "\"";
     }
     out += " ;\n";
@@ -66,7 +72,8 @@ void AddParamNames(std::string& out, std::uint8_t node) {
 }  // namespace
 
 std::string GenerateDbc() {
-  std::string out = "VERSION \"maestro-jc protocol " + std::to_string(kVersion) +
+  std::string out = "VERSION \"maestro-jc protocol " +
+                    std::to_string(protocol::kVersion) +
                     "\"\n\nNS_ :\n\nBS_:\n\nBU_: Host";
   for (std::uint8_t n = kMinNode; n <= kMaxNode; ++n) out += " " + NodeName(n);
   out += "\n\n";

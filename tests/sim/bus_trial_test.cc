@@ -16,11 +16,13 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <numbers>
 #include <random>
 #include <thread>
 #include <vector>
 
 #include "mjc/app/can_node.h"
+#include "mjc/host/report.h"
 #include "mjc/host/trial_runner.h"
 #include "mjc/plant/params.h"
 #include "mjc/sim/link_can_port.h"
@@ -170,7 +172,7 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
 
   host::BoardClient client(host_link.get(), 1);
   TrialConfig config;
-  config.amplitude = Angle::Quantize(15.0 * 3.14159265358979323846 / 180.0);
+  config.amplitude = Angle::Quantize(15.0 * std::numbers::pi / 180.0);
   config.frequency_mHz = 500;
   config.repetitions = 5;
   config.rest_100ms = 5;
@@ -187,9 +189,10 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
 
 // The middle three flexions against the plant's truth over the same ticks.
 void ExpectWindowsMatchTruth(const BoardRun& run) {
-  const auto flexions = host::MiddleFlexions(run.trial.windows, 5);
+  const auto flexions = host::AnalysedFlexions(run.trial.windows, 5);
   ASSERT_EQ(flexions.size(), 3u);
-  for (const host::BoardWindow& w : flexions) {
+  for (const host::BoardWindow* analysed : flexions) {
+    const host::BoardWindow& w = *analysed;
     ASSERT_LT(w.end_tick, run.truth_energy.size());
     const double load = run.truth_energy[w.peak_tick] - run.truth_energy[w.start_tick];
     const double unload = run.truth_energy[w.end_tick] - run.truth_energy[w.peak_tick];

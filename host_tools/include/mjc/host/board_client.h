@@ -89,6 +89,28 @@ enum class WaitEnd : std::uint8_t {
   kAmbiguous = 5,    // two boards answer with this node id (BoardClient::ambiguous)
 };
 
+// Follows a motion a board was told to start (a trial or a stream: kRunning; a
+// calibration sweep: kCalibrating) through the states it reports, until it is over:
+// idle again once the motion's state was seen, or faulted. An idle board before that is
+// the board before the start took effect. The tools' waits over the bus and the
+// simulator's loops on the application share it.
+class MotionEnd {
+ public:
+  explicit constexpr MotionEnd(protocol::BoardState motion) : motion_(motion) {}
+  // The state the board reports now: true once the motion is over.
+  constexpr bool Over(protocol::BoardState state) {
+    if (state == motion_) started_ = true;
+    return state == protocol::BoardState::kFault ||
+           (started_ && state == protocol::BoardState::kIdle);
+  }
+  // The motion's state was seen.
+  constexpr bool started() const { return started_; }
+
+ private:
+  protocol::BoardState motion_;
+  bool started_ = false;
+};
+
 enum class HostHeartbeats : std::uint8_t {
   kOff = 0,   // the board is not supervised by this client
   kSend = 1,  // a HostHeartbeat every kHostHeartbeatPeriod while the client polls
@@ -191,6 +213,12 @@ class BoardClient {
   // arrived (windows, samples).
   bool Await(const std::function<bool()>& done, const Patience& patience, WaitEnd* end,
              std::string* why);
+
+  // Follows the motion this client just started (MotionEnd) with Await: true once it
+  // is over — status() then says idle or faulted. `each` (may be empty) is called on
+  // every pass first, to take what arrived (windows, samples) and show progress.
+  bool AwaitMotionEnd(protocol::BoardState motion, const std::function<void()>& each,
+                      const Patience& patience, WaitEnd* end, std::string* why);
 
   // Listens until the node has shown who it is: its clock has advanced a BoardInfo
   // period and a tenth (kBoardInfoPeriod; every board answering with this node id has
