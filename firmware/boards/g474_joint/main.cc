@@ -16,11 +16,14 @@
 #include "hal/stm32g4/watchdog.h"
 #include "mjc/app/joint_board.h"
 #include "mjc/app/joint_config.h"
+#include "mjc/boot/handoff.h"
 #include "mjc/build_id.h"
 
 extern "C" {
 // The calibration pages' place in flash (linker/stm32g474.ld).
 extern const std::uint8_t __calibration_start[];
+// Shared with the bootloader across resets (linker/stm32g474.ld, HANDOFF).
+extern mjc::boot::BootHandoff __boot_handoff;
 void TickInterrupt();
 void CanLine0Interrupt();
 void CanLine1Interrupt();
@@ -121,12 +124,20 @@ int main() {
   stm32g4::EnableInterrupts();
 
   std::uint32_t last_tick = g_ticks.load(std::memory_order_acquire);
+  bool confirmed = false;
   for (;;) {
     // The watchdog is refreshed only while the tick also runs.
     const std::uint32_t tick = g_ticks.load(std::memory_order_acquire);
     if (tick != last_tick) {
       stm32g4::RefreshWatchdog();
       last_tick = tick;
+    }
+    // A healthy start, told to the bootloader once the tick and this loop have run for
+    // 2 s (20,000 ticks) with the watchdog refreshed: until then a reset counts as a
+    // failed start, and after three the bootloader stays (firmware/bootloader).
+    if (!confirmed && tick >= 20'000u) {
+      boot::ConfirmHealthyBoot(__boot_handoff);
+      confirmed = true;
     }
     g_board->Poll();
     // Alive: the LED toggles every 5,000 ticks (1 Hz blink).
