@@ -390,5 +390,6 @@ void AddFlash(CLI::App& app);
 
 void AddEstop(CLI::App& app);
 void AddReset(CLI::App& app);
+void AddParam(CLI::App& app);
 
 }  // namespace mjc::cli

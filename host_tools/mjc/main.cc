@@ -121,6 +121,7 @@ int main(int argc, char** argv) {
   mjc::cli::AddFlash(app);
   mjc::cli::AddEstop(app);
   mjc::cli::AddReset(app);
+  mjc::cli::AddParam(app);
   if (const std::string unknown = UnknownCommand(app, argc, argv); !unknown.empty()) {
     std::fprintf(stderr, "%s\n", unknown.c_str());
     return static_cast<int>(Exit::kUsage);

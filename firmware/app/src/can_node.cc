@@ -192,7 +192,7 @@ void CanNode::HandleCommand(const protocol::Command& c) {
         o = {CommandOutcomeCode::kRefusedInvalid, 0};
         break;
       }
-      auto sweep = Oscillation<mjc::SweepConfig>(sweep_, hz);
+      auto sweep = Oscillation<RampedSineConfig>(sweep_, hz);
       sweep.end_amplitude = sweep_.end_amplitude;
       o = WindowReportable(sweep.frequency, hz)
               ? app_->StartCalibrationSweep(sweep, tag)
