@@ -261,7 +261,6 @@ void AddSim(CLI::App& app) {
         Tell(e, iface, robot, subject);
       }
     };
-    tell();
     const std::atomic<bool>& stop = StopOnSignals();
     std::signal(SIGUSR1, OnSensorFaultSignal);
     std::signal(SIGUSR2, OnSensorFaultSignal);
@@ -278,6 +277,9 @@ void AddSim(CLI::App& app) {
     std::uint64_t origin_tick = 0;
     bool in_application = board.in_application();
     filter(in_application);
+    // Told once the filters are the running image's: a script that starts talking to the
+    // board on "node N on IFACE" never sends into the bootloader's filters.
+    tell();
     double lost_s = 0;  // wall time the board fell behind its speed, in all
     bool warned = false;
     std::uint32_t bus_off_seen = 0;
@@ -288,7 +290,6 @@ void AddSim(CLI::App& app) {
       // it in the kernel). A frame waits at most 1 ms.
       if (ticks % kPollEveryTicks == 0) {
         board.Poll();
-        tell();
         if (port.failed()) throw Failure(port.error());
         if (board.in_application() != in_application) {
           // Another image, another pace (at --speed 0), and the counters start anew.
@@ -298,6 +299,8 @@ void AddSim(CLI::App& app) {
           origin_tick = ticks;
           bus_off_seen = 0;
         }
+        // After the filters follow the image (see above).
+        tell();
         if (app::JointBoard* a = board.application()) {
           for (; bus_off_seen < a->node().counters().bus_off; ++bus_off_seen) {
             std::fprintf(stderr,
