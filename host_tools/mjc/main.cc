@@ -120,6 +120,7 @@ int main(int argc, char** argv) {
   mjc::cli::AddList(app);
   mjc::cli::AddEstop(app);
   mjc::cli::AddReset(app);
+  mjc::cli::AddFlash(app);
   if (const std::string unknown = UnknownCommand(app, argc, argv); !unknown.empty()) {
     std::fprintf(stderr, "%s\n", unknown.c_str());
     return static_cast<int>(Exit::kUsage);
