@@ -20,7 +20,8 @@
 #   - mjc flash --reset-line: a board that hangs (its mjc sim stopped with SIGSTOP,
 #     resumed once the pulse is over: the real chip would be reset at once) restarts on
 #     its NRST (mjc sim --reset-line, an input of the test chip wired to the host's
-#     output) and the BootHolds catch its bootloader: updated.
+#     output) and the BootHolds catch its bootloader: updated; a board in a motion is
+#     refused and its NRST left alone.
 # Prints estop_to_stop_frame_ms (estop_latency).
 # usage: gpio.sh <path of mjc> <path of estop_latency> <path of mjc-image>
 set -u
@@ -285,6 +286,20 @@ check "  (its application never took a hold)" sh -c "! grep -q 'entering the boo
 check "  one pulse on the wire" test "$(read_dbg 3 falling)" -eq $((falling3 + 1))
 kill -INT "$sim3"
 wait "$sim3"
+# A board in a motion is not reset under a person's hand.
+"$mjc" trial --iface vcan0 --node 1 --estop-line none --protocol amplitude --amplitudes 15 \
+  --reps 20 --frequency-hz 0.5 --rest-s 0.2 --out "$work/t4" >"$work/t4.out" 2>"$work/t4.err" &
+trial=$!
+check "a trial runs on node 1" wait_for "$work/t4.err" "repetition 1/20"
+falling2=$(read_dbg 2 falling)
+"$mjc" flash --iface vcan0 --node 1 --reset-line "$chip:nrst1" "$work/new.bin" \
+  >/dev/null 2>"$work/flash1.err"
+status=$?
+check "mjc flash --reset-line refuses a board in a motion: exit 4 ($status)" test "$status" -eq 4
+check "  saying why" grep -q "node 1 is running a motion: stop it first (mjc stop --node 1); nothing was done (its reset line would stop it mid-motion)" "$work/flash1.err"
+check "  and its NRST was not touched" test "$(read_dbg 2 falling)" -eq "$falling2"
+"$mjc" stop --iface vcan0 --node 1 >/dev/null 2>&1
+wait "$trial"
 
 # --- the figure -----------------------------------------------------------------------
 "$mjc" estop --iface vcan0 --line "$chip:spare5" >"$work/bench.out" 2>&1 &
