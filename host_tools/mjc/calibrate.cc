@@ -29,7 +29,12 @@
 namespace mjc::cli {
 namespace {
 
-using namespace mjc::protocol;
+using protocol::BoardState;
+using protocol::CalibrationRecord;
+using protocol::CalibrationResult;
+using protocol::CommandCode;
+using protocol::CommandOutcomeCode;
+using protocol::ParamId;
 
 // The files a calibration run writes into its folder (replaced under --force).
 const std::vector<std::string> kOutputs = {"calibration.json", "sweep.csv", "run.json"};
@@ -170,20 +175,17 @@ void AddCalibrate(CLI::App& app) {
       // length in the board's time, and the board may not fall silent.
       const double expected_s = cycles / frequency_hz + 2 * sweep.rest_100ms / 10.0;
       std::vector<double> motor, joint;
-      bool sweeping_seen = false;
       // Progress from the board's own clock: its time into the sweep against the sweep's
       // length, and so the cycle it is in.
       std::optional<std::uint32_t> sweep_start;
       std::uint32_t shown_tick = 0;
       const double rest_s = sweep.rest_100ms / 10.0;
-      const auto finished = [&] {
+      const auto take_samples = [&] {
         for (const host::AngleSample& a : board.TakeAngles()) {
           motor.push_back(a.motor_rad);
           joint.push_back(a.joint_rad);
         }
-        const BoardState state = board.status().state;
-        if (state == BoardState::kCalibrating) {
-          sweeping_seen = true;
+        if (board.status().state == BoardState::kCalibrating) {
           const std::uint32_t tick = board.status().tick;
           if (!sweep_start) sweep_start = tick;
           if (tick != shown_tick) {
@@ -198,13 +200,12 @@ void AddCalibrate(CLI::App& app) {
             Progress(line);
           }
         }
-        return state == BoardState::kFault ||
-               (sweeping_seen && state == BoardState::kIdle);
       };
       const host::Patience patience{
           std::chrono::milliseconds(static_cast<long>(2000 * expected_s) + 2000)};
       host::WaitEnd end{};
-      const bool ended = board.Await(finished, patience, &end, &why);
+      const bool ended = board.AwaitMotionEnd(BoardState::kCalibrating, take_samples,
+                                              patience, &end, &why);
       board.KeepAngles(false);
       EndProgress();
       // The stop first (the motor must not wait for a file), then the samples, kept

@@ -57,9 +57,9 @@ inline constexpr const char* kExitStatusHelp =
     "calibration or did not keep what was sent; 5 the board faulted; 6 the motion was "
     "stopped before its end (interrupted: the board was stopped and what arrived is "
     "saved; stopped by another tool; or by the emergency stop); 7 two boards answer "
-    "with one node id (nothing was done to it; give each board its own id); 8 mjc "
-    "flash: a board was not updated (named; it waits in its bootloader: run mjc flash "
-    "again).\n"
+    "with one node id (nothing was done to it; give each board its own id); 8 mjc flash: "
+    "a board was not updated (named; it waits "
+    "in its bootloader: run mjc flash again).\n"
     "Defaults: --iface from MJC_IFACE, else the config file's \"iface\", else vcan0; "
     "--node from its \"node\", else 1; GPIO lines (CHIP:LINE) from its \"estop_line\", "
     "\"estop_active\", \"sync_line\" and \"reset_lines\". The config file is "
@@ -270,6 +270,11 @@ inline void IdentifyOrThrow(host::BoardClient& board, std::chrono::milliseconds 
   throw Failure(Exit::kNoAnswer, why);
 }
 
+// mjc list's scan and table (or JSON lines) of every board on `iface`; mjc flash --info
+// shows the same. Throws Failure: nothing heard (kNoAnswer), two boards behind one id
+// (kAmbiguous, after the table), the link, a signal.
+void ListBoards(const std::string& iface, int silence_ms, bool json);
+
 // --- GPIO lines (README: GPIO lines) ---------------------------------------------
 
 // A CHIP:LINE option's check ("none" too, where `none` allows it: no line).
@@ -370,11 +375,6 @@ inline std::string ConfirmEmergencyStop(host::BoardClient& board,
   return what + "; " + who + " did not confirm it (" + why + ")";
 }
 
-// mjc list's scan and table (or JSON lines) of every board on `iface`; mjc flash --info
-// shows the same. Throws Failure: nothing heard (kNoAnswer), two boards behind one id
-// (kAmbiguous, after the table), the link, a signal.
-void ListBoards(const std::string& iface, int silence_ms, bool json);
-
 void AddSim(CLI::App& app);
 void AddLog(CLI::App& app);
 void AddCal(CLI::App& app);
@@ -386,8 +386,10 @@ void AddMonitor(CLI::App& app);
 void AddClear(CLI::App& app);
 void AddStop(CLI::App& app);
 void AddList(CLI::App& app);
+void AddFlash(CLI::App& app);
+
 void AddEstop(CLI::App& app);
 void AddReset(CLI::App& app);
-void AddFlash(CLI::App& app);
+void AddParam(CLI::App& app);
 
 }  // namespace mjc::cli

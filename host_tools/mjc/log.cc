@@ -22,7 +22,12 @@
 namespace mjc::cli {
 namespace {
 
-using namespace mjc::protocol;
+using protocol::AllMessages;
+using protocol::CanFrame;
+using protocol::DecodeError;
+using protocol::FunctionOf;
+using protocol::Message;
+using protocol::NodeOf;
 
 // "1712345678.000123": a timestamp exact to the microsecond.
 std::string Seconds(std::int64_t us) {

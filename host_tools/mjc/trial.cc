@@ -47,8 +47,8 @@ Exit ExitOf(host::TrialEnd end) {
 }
 
 // The files a trial run writes into its folder (replaced under --force).
-const std::vector<std::string> kOutputs = {"windows.csv", "run.json",   "eta.png",
-                                           "eta.gp",      "eta.gp.log", "report.md"};
+const std::vector<std::string> kTrialOutputs = {"windows.csv", "run.json",   "eta.png",
+                                                "eta.gp",      "eta.gp.log", "report.md"};
 
 }  // namespace
 
@@ -102,7 +102,8 @@ void AddTrial(CLI::App& app) {
   cmd->callback([] {
     host::OutputFolder folder;
     try {
-      folder = host::PrepareOutputFolder(output.out, "out/trial", output.force, kOutputs);
+      folder =
+          host::PrepareOutputFolder(output.out, "out/trial", output.force, kTrialOutputs);
     } catch (const std::exception& e) {
       throw Failure(e.what());
     }

@@ -11,7 +11,23 @@
 
 namespace mjc::host {
 
-using namespace mjc::protocol;
+using protocol::BoardInfo;
+using protocol::BoardState;
+using protocol::CanFrame;
+using protocol::CommandCode;
+using protocol::CommandOutcomeCode;
+using protocol::DecodeError;
+using protocol::Function;
+using protocol::FunctionOf;
+using protocol::HostHeartbeat;
+using protocol::NodeOf;
+using protocol::ParamId;
+using protocol::ParamRead;
+using protocol::ParamStatus;
+using protocol::ParamValue;
+using protocol::ParamWrite;
+using protocol::SentByBoard;
+using protocol::SessionId;
 
 void BoardIdentity::OnInfo(const BoardInfo& info) {
   info_since_heartbeat_ = true;
@@ -152,6 +168,17 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
   }
 }
 
+bool BoardClient::AwaitMotionEnd(BoardState motion, const std::function<void()>& each,
+                                 const Patience& patience, WaitEnd* end,
+                                 std::string* why) {
+  MotionEnd follow(motion);
+  const auto over = [&] {
+    if (each) each();
+    return follow.Over(status_.state);
+  };
+  return Await(over, patience, end, why);
+}
+
 bool BoardClient::Identify(WaitEnd* end, std::string* why,
                            std::chrono::milliseconds silence) {
   // Counted from the first heartbeat this wait sees, in the board's ticks.
@@ -182,28 +209,41 @@ std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int tim
   return std::nullopt;
 }
 
-std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
-                                                   std::string* why) {
+template <class Request>
+std::optional<ParamValue> BoardClient::AskParam(const Request& request, ParamId id,
+                                                int timeout_ms, const char* what,
+                                                std::string* why) {
   last_param_.reset();
-  if (!Send(ParamRead{id}, why)) return std::nullopt;
+  if (!Send(request, why)) return std::nullopt;
   const auto answered = [&] { return last_param_ && last_param_->id == id; };
   const std::chrono::milliseconds timeout{timeout_ms};
   WaitEnd end{};
   if (!Await(answered, {timeout, timeout}, &end, why)) {
     if (end == WaitEnd::kBoardTime) {
-      *why = "node " + std::to_string(node_) +
-             " talks but did not answer a parameter read within " +
-             std::to_string(timeout_ms) + " ms of its own time";
+      *why = "node " + std::to_string(node_) + " talks but did not answer " + what +
+             " within " + std::to_string(timeout_ms) + " ms of its own time";
     }
     return std::nullopt;
   }
-  if (last_param_->status != ParamStatus::kOk) {
+  return last_param_;
+}
+
+std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
+                                                   std::string* why) {
+  const auto answer = AskParam(ParamRead{id}, id, timeout_ms, "a parameter read", why);
+  if (!answer) return std::nullopt;
+  if (answer->status != ParamStatus::kOk) {
     *why = "node " + std::to_string(node_) + " answered parameter " +
            std::to_string(static_cast<int>(id)) + " with status " +
-           std::to_string(static_cast<int>(last_param_->status));
+           std::to_string(static_cast<int>(answer->status));
     return std::nullopt;
   }
-  return last_param_->value;
+  return answer->value;
+}
+
+std::optional<ParamValue> BoardClient::WriteParam(ParamId id, std::int32_t raw,
+                                                  int timeout_ms, std::string* why) {
+  return AskParam(ParamWrite{id, raw}, id, timeout_ms, "a parameter write", why);
 }
 
 bool BoardClient::Poll(int timeout_ms, std::string* why) {
@@ -303,7 +343,7 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kHeartbeat: {
-      Heartbeat h;
+      protocol::Heartbeat h;
       if (!ok(Decode(f, &h))) return;
       identity_.OnHeartbeat(h.tick);
       ++heartbeats_heard_;
@@ -315,7 +355,7 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kFault: {
-      FaultEvent e;
+      protocol::FaultEvent e;
       if (ok(Decode(f, &e))) {
         status_.fault = e.fault;
         status_.state = BoardState::kFault;
@@ -323,7 +363,7 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kTelemetryAngles: {
-      TelemetryAngles a;
+      protocol::TelemetryAngles a;
       if (ok(Decode(f, &a))) {
         status_.motor_rad = a.motor.ToDouble();
         status_.joint_rad = a.joint.ToDouble();
@@ -332,28 +372,28 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kTelemetryTorque: {
-      TelemetryTorque t;
+      protocol::TelemetryTorque t;
       if (ok(Decode(f, &t))) status_.torque_Nm = t.torque.ToDouble();
       return;
     }
     case Function::kTelemetryPower: {
-      TelemetryPower p;
+      protocol::TelemetryPower p;
       if (ok(Decode(f, &p))) status_.power_W = p.power.ToDouble();
       return;
     }
     case Function::kTelemetryEnergy: {
-      TelemetryEnergy e;
+      protocol::TelemetryEnergy e;
       if (ok(Decode(f, &e))) status_.energy_J = e.energy.ToDouble();
       return;
     }
     case Function::kWindowStart: {
-      WindowStart w;
+      protocol::WindowStart w;
       if (ok(Decode(f, &w)) && on_window_start_) on_window_start_(w);
       return;
     }
     // A window travels as five frames (see AcceptWindowPart).
     case Function::kWindowHeader: {
-      WindowHeader h;
+      protocol::WindowHeader h;
       if (!ok(Decode(f, &h)) || !AcceptWindowPart(0)) return;
       partial_.motion = h.motion;
       partial_.repetition = h.repetition;
@@ -362,28 +402,28 @@ void BoardClient::Handle(const CanFrame& f) {
       return;
     }
     case Function::kWindowEnergy: {
-      WindowEnergy e;
+      protocol::WindowEnergy e;
       if (!ok(Decode(f, &e)) || !AcceptWindowPart(1)) return;
       partial_.loading_J = e.loading.ToDouble();
       partial_.unloading_J = e.unloading.ToDouble();
       return;
     }
     case Function::kWindowWork: {
-      WindowWork w;
+      protocol::WindowWork w;
       if (!ok(Decode(f, &w)) || !AcceptWindowPart(2)) return;
       partial_.positive_J = w.positive.ToDouble();
       partial_.negative_J = w.negative.ToDouble();
       return;
     }
     case Function::kWindowPeaks: {
-      WindowPeaks p;
+      protocol::WindowPeaks p;
       if (!ok(Decode(f, &p)) || !AcceptWindowPart(3)) return;
       partial_.peak_power_W = p.peak_power.ToDouble();
       partial_.peak_torque_Nm = p.peak_torque.ToDouble();
       return;
     }
     case Function::kWindowTicks: {
-      WindowTicks t;
+      protocol::WindowTicks t;
       if (!ok(Decode(f, &t)) || !AcceptWindowPart(4)) return;
       partial_.start_tick = t.start_tick;
       partial_.peak_tick = t.start_tick + t.peak_offset;

@@ -5,7 +5,18 @@
 
 namespace mjc::host {
 
-using namespace mjc::protocol;
+using protocol::BoardInfo;
+using protocol::BootStatus;
+using protocol::CanFrame;
+using protocol::DecodeError;
+using protocol::Function;
+using protocol::FunctionOf;
+using protocol::Heartbeat;
+using protocol::kBoardTickHz;
+using protocol::kMaxNode;
+using protocol::kMinNode;
+using protocol::NodeOf;
+using protocol::SentByBoard;
 
 void BusScan::Handle(const CanFrame& f) {
   const int node = NodeOf(f.id);

@@ -22,8 +22,6 @@ double FrameTimeS(int n, const BusTiming& t) {
 
 namespace {
 
-using namespace mjc::protocol;
-
 // Frames per second each board sends of every window part: two windows (flexion and
 // extension) per cycle, at most 2 Hz cycles in the paper's protocols.
 constexpr double kWindowsHz = 4.0;
@@ -36,26 +34,26 @@ BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards,
                        const BusTiming& t) {
   BusLoad load;
   auto add = [&]<class M>(M, double hz, const char* suffix = "") {
-    const int bytes = Message<M>::kLength;
-    BusLoadLine line{std::string(Message<M>::kName) + suffix, bytes, hz,
+    const int bytes = protocol::Message<M>::kLength;
+    BusLoadLine line{std::string(protocol::Message<M>::kName) + suffix, bytes, hz,
                      hz * boards * FrameTimeS(bytes, t)};
     load.total_fraction += line.load_fraction;
     load.lines.push_back(line);
   };
-  add(TelemetryAngles{}, r.angles_hz);
-  add(TelemetryTorque{}, r.torque_hz);
-  add(TelemetryPower{}, r.power_hz);
-  add(TelemetryEnergy{}, r.energy_hz);
-  add(TelemetryControl{}, r.control_hz);
-  add(Heartbeat{}, r.heartbeat_hz);
-  add(BoardInfo{}, r.info_hz);
-  add(WindowStart{}, kWindowsHz);
-  add(WindowHeader{}, kWindowsHz);
-  add(WindowEnergy{}, kWindowsHz);
-  add(WindowWork{}, kWindowsHz);
-  add(WindowPeaks{}, kWindowsHz);
-  add(WindowTicks{}, kWindowsHz);
-  add(HostHeartbeat{}, kHostHeartbeatHz, " (host)");
+  add(protocol::TelemetryAngles{}, r.angles_hz);
+  add(protocol::TelemetryTorque{}, r.torque_hz);
+  add(protocol::TelemetryPower{}, r.power_hz);
+  add(protocol::TelemetryEnergy{}, r.energy_hz);
+  add(protocol::TelemetryControl{}, r.control_hz);
+  add(protocol::Heartbeat{}, r.heartbeat_hz);
+  add(protocol::BoardInfo{}, r.info_hz);
+  add(protocol::WindowStart{}, kWindowsHz);
+  add(protocol::WindowHeader{}, kWindowsHz);
+  add(protocol::WindowEnergy{}, kWindowsHz);
+  add(protocol::WindowWork{}, kWindowsHz);
+  add(protocol::WindowPeaks{}, kWindowsHz);
+  add(protocol::WindowTicks{}, kWindowsHz);
+  add(protocol::HostHeartbeat{}, kHostHeartbeatHz, " (host)");
   return load;
 }
 
@@ -65,7 +63,8 @@ double MaxTelemetryHz(protocol::TelemetryRates rates, int boards, const BusTimin
   const double rest = ComputeBusLoad(rates, boards, timing).total_fraction;
   if (rest >= budget) return 0;
   return (budget - rest) /
-         (boards * FrameTimeS(Message<TelemetryAngles>::kLength, timing));
+         (boards *
+          FrameTimeS(protocol::Message<protocol::TelemetryAngles>::kLength, timing));
 }
 
 std::string FormatBusLoad(const BusLoad& load, const BusTiming& t, int boards) {

@@ -12,7 +12,12 @@
 namespace mjc::host {
 namespace {
 
-using namespace mjc::protocol;
+using protocol::AllMessages;
+using protocol::IdOf;
+using protocol::kMaxNode;
+using protocol::kMinNode;
+using protocol::Message;
+using protocol::Sender;
 
 std::string Num(double v) {
   char text[40];
@@ -41,7 +46,7 @@ std::string SignalLine(const S& s, const std::string& receiver) {
 // from the host) once, as "<Name>", when `node` is kEveryNode.
 template <class M>
 void AddMessage(std::string& out, std::uint8_t node) {
-  if (Message<M>::kBroadcast != (node == kEveryNode)) return;
+  if (Message<M>::kBroadcast != (node == protocol::kEveryNode)) return;
   const bool from_board = Message<M>::kSender == Sender::kBoard;
   std::string everyone;
   for (std::uint8_t n = kMinNode; n <= kMaxNode; ++n) {
@@ -62,10 +67,11 @@ void AddMessage(std::string& out, std::uint8_t node) {
 // The parameter ids' names, from the protocol's list, on every message that carries one.
 template <class M>
 void AddParamNames(std::string& out, std::uint8_t node) {
-  if constexpr (std::is_same_v<M, ParamRead> || std::is_same_v<M, ParamWrite> ||
-                std::is_same_v<M, ParamValue>) {
+  if constexpr (std::is_same_v<M, protocol::ParamRead> ||
+                std::is_same_v<M, protocol::ParamWrite> ||
+                std::is_same_v<M, protocol::ParamValue>) {
     out += "VAL_ " + std::to_string(IdOf<M>(node)) + " param";
-    for (const ParamInfo& p : kParams) {
+    for (const protocol::ParamInfo& p : protocol::kParams) {
       out += " " + std::to_string(static_cast<int>(p.id)) + " \"" + p.key + "\"";
     }
     out += " ;\n";
@@ -75,11 +81,14 @@ void AddParamNames(std::string& out, std::uint8_t node) {
 }  // namespace
 
 std::string GenerateDbc() {
-  std::string out = "VERSION \"maestro-jc protocol 1\"\n\nNS_ :\n\nBS_:\n\nBU_: Host";
+  std::string out = "VERSION \"maestro-jc protocol " +
+                    std::to_string(protocol::kVersion) +
+                    "\"\n\nNS_ :\n\nBS_:\n\nBU_: Host";
   for (std::uint8_t n = kMinNode; n <= kMaxNode; ++n) out += " " + NodeName(n);
   out += "\n\n";
-  std::apply([&](auto... m) { (AddMessage<decltype(m)>(out, kEveryNode), ...); },
-             AllMessages{});
+  std::apply(
+      [&](auto... m) { (AddMessage<decltype(m)>(out, protocol::kEveryNode), ...); },
+      AllMessages{});
   for (std::uint8_t n = kMinNode; n <= kMaxNode; ++n) {
     std::apply([&](auto... m) { (AddMessage<decltype(m)>(out, n), ...); }, AllMessages{});
   }

@@ -68,6 +68,26 @@ std::string_view OutcomeName(protocol::CommandOutcomeCode outcome) {
   return "unknown outcome";
 }
 
+std::string_view ParamStatusName(protocol::ParamStatus status) {
+  using protocol::ParamStatus;
+  switch (status) {
+    case ParamStatus::kOk:
+      return "ok";
+    case ParamStatus::kUnknown:
+      return "unknown parameter";
+    case ParamStatus::kOutOfRange:
+      return "out of range, or refused by the board's check of its whole control "
+             "configuration";
+    case ParamStatus::kRefusedNotIdle:
+      return "the board is not idle (control parameters change only while it is)";
+    case ParamStatus::kReadOnly:
+      return "read-only";
+    case ParamStatus::kRefusedBusy:
+      return "an earlier write or calibration is still being applied: try again";
+  }
+  return "unknown status";
+}
+
 std::string_view StateName(protocol::BoardState state) {
   switch (state) {
     case protocol::BoardState::kIdle:

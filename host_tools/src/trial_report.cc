@@ -45,17 +45,17 @@ std::string TrialTables(const std::vector<TrialWindows>& trials, bool repeatabil
   int skipped = 0;
   for (std::size_t t = 0; t < trials.size(); ++t) {
     std::vector<double> eta, load, unload, net;
-    for (const BoardWindow& w :
-         MiddleFlexions(trials[t].windows, trials[t].repetitions)) {
-      load.push_back(w.loading_J * 1e3);
-      unload.push_back(w.unloading_J * 1e3);
-      net.push_back(w.net_J() * 1e3);
-      if (!w.eta_valid) {
+    for (const BoardWindow* w :
+         AnalysedFlexions(trials[t].windows, trials[t].repetitions)) {
+      load.push_back(w->loading_J * 1e3);
+      unload.push_back(w->unloading_J * 1e3);
+      net.push_back(w->net_J() * 1e3);
+      if (!w->eta_valid) {
         ++skipped;
         continue;
       }
-      eta.push_back(w.eta_percent);
-      all.push_back(w.eta_percent);
+      eta.push_back(w->eta_percent);
+      all.push_back(w->eta_percent);
     }
     const Stats e = Describe(eta);
     if (repeatability) {
@@ -89,7 +89,7 @@ std::string TrialTables(const std::vector<TrialWindows>& trials, bool repeatabil
   if (!trials.empty() && std::all_of(trials.begin(), trials.end(), [&](const auto& t) {
         return t.repetitions == trials.front().repetitions;
       })) {
-    const RepetitionRange keep = MiddleRepetitions(trials.front().repetitions, 3);
+    const RepetitionRange keep = AnalysedRepetitions(trials.front().repetitions);
     std::snprintf(line, sizeof line, " (repetitions %d-%d of %d)", keep.first + 1,
                   keep.first + keep.count, trials.front().repetitions);
     which += line;
@@ -120,9 +120,9 @@ void WriteWindowsCsv(const std::vector<TrialWindows>& trials,
                      const std::filesystem::path& dir) {
   std::string text = std::string(kNote) + "\n" + Joined(kColumns) + "\n";
   for (std::size_t t = 0; t < trials.size(); ++t) {
-    const RepetitionRange keep = MiddleRepetitions(trials[t].repetitions, 3);
     for (const BoardWindow& w : trials[t].windows) {
-      const bool analysed = w.motion == Motion::kFlexion && keep.Contains(w.repetition);
+      const bool analysed =
+          IsAnalysedFlexion(w.motion, w.repetition, trials[t].repetitions);
       text += Joined({std::to_string(t + 1), CsvTable::Number(trials[t].amplitude_deg),
                       std::to_string(trials[t].repetitions),
                       w.motion == Motion::kFlexion ? "flexion" : "extension",

@@ -6,7 +6,10 @@
 
 namespace mjc::host {
 
-using namespace mjc::protocol;
+using protocol::BoardState;
+using protocol::CommandCode;
+using protocol::CommandOutcomeCode;
+using protocol::TrialConfig;
 
 std::chrono::milliseconds TrialBoardTime(const TrialConfig& config) {
   const double frequency_hz = config.frequency_mHz / 1000.0;
@@ -52,19 +55,15 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
   // running. Its frames arrive in the order it sent them, and it sends a window's
   // frames before the heartbeat that reports the trial over, so every window is in by
   // then. Bounded by twice the trial's own length in the board's time, and by silence.
-  bool running_seen = false;
-  const auto finished = [&] {
+  const auto take_windows = [&] {
     for (BoardWindow& w : board.TakeWindows()) {
       if (progress) progress(w);
       out.windows.push_back(w);
     }
-    const BoardState state = board.status().state;
-    if (state == BoardState::kRunning) running_seen = true;
-    return state == BoardState::kFault || (running_seen && state == BoardState::kIdle);
   };
   const Patience patience{2 * TrialBoardTime(config) + std::chrono::seconds(2)};
   WaitEnd end{};
-  if (!board.Await(finished, patience, &end, &why)) {
+  if (!board.AwaitMotionEnd(BoardState::kRunning, take_windows, patience, &end, &why)) {
     switch (end) {
       case WaitEnd::kLinkFailed:
         return fail(TrialEnd::kLinkFailed, why);
@@ -95,16 +94,6 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
   }
   out.end = TrialEnd::kCompleted;
   out.completed = true;
-  return out;
-}
-
-std::vector<BoardWindow> MiddleFlexions(const std::vector<BoardWindow>& windows,
-                                        std::uint16_t repetitions) {
-  const RepetitionRange keep = MiddleRepetitions(repetitions, 3);
-  std::vector<BoardWindow> out;
-  for (const BoardWindow& w : windows) {
-    if (w.motion == Motion::kFlexion && keep.Contains(w.repetition)) out.push_back(w);
-  }
   return out;
 }
 

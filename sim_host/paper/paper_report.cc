@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 
@@ -16,7 +17,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using host::CsvTable;
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMilli = 1e3;
 
 std::string Format(const char* fmt, double a) {
@@ -88,7 +88,7 @@ void Report::Figure(const std::string& name, const std::string& script) {
 }
 
 void Report::Calibration(const sim::CalibrationOutcome& cal) {
-  const double deg = 180.0 / kPi;
+  const double deg = 180.0 / std::numbers::pi;
   Print(
       "\n## Calibration (Fig. 7): increasing sinusoid on the robot alone, NLopt fit\n\n");
   Print("| offset | plant (°) | fitted (°) | error (°) |\n|---|---|---|---|\n");
@@ -173,7 +173,7 @@ void Report::Repeatability(const sim::RepeatabilityOutcome& rep, double amplitud
           " | " + Format("%.3f%%", rep.eta[i].std) + " | " +
           Format("%.2f%%", rep.truth_eta[i].mean) + " | " +
           Format("%.3f%%", rep.truth_eta[i].std) + " |\n");
-    for (const auto* w : sim::AnalysedFlexions(rep.trials[i], 5)) {
+    for (const auto* w : host::AnalysedFlexions(rep.trials[i].windows, 5)) {
       csv.AddRow({std::to_string(i + 1), std::to_string(w->repetition),
                   CsvTable::Number(w->eta), CsvTable::Number(w->truth_eta),
                   CsvTable::Number(w->load), CsvTable::Number(w->truth_load),
@@ -196,7 +196,7 @@ void Report::Repeatability(const sim::RepeatabilityOutcome& rep, double amplitud
   CsvTable prof({"fraction", "trial", "mean_mW", "std_mW", "truth_mean_mW"});
   double peak_fraction = 0.5;
   for (std::size_t i = 0; i < rep.trials.size(); ++i) {
-    const auto flex = sim::AnalysedFlexions(rep.trials[i], 5);
+    const auto flex = host::AnalysedFlexions(rep.trials[i].windows, 5);
     if (flex.empty()) continue;
     peak_fraction = flex.front()->peak_fraction;
     for (int k = 0; k < sim::kProfilePoints; ++k) {
@@ -374,9 +374,9 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
                              std::to_string(config.velocity_window) + ")");
   }
   report.Progress("calibration sweep on the robot alone", 0.0);
-  SweepConfig sweep;
+  RampedSineConfig sweep;
   sweep.start_amplitude = Angle{};
-  sweep.end_amplitude = Angle::Quantize(30.0 * kPi / 180.0);
+  sweep.end_amplitude = Angle::Quantize(30.0 * std::numbers::pi / 180.0);
   sweep.frequency = Frequency::FromDouble(0.5);
   sweep.repetitions = 10;
   sweep.rest_ms = 500;

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <numbers>
 #include <vector>
 
 #include "mjc/core/backlash.h"
@@ -21,7 +22,6 @@
 namespace {
 
 using namespace mjc;
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kTickHz = 10000;
 constexpr std::int64_t kTicks = 3600LL * kTickHz;
 
@@ -69,8 +69,8 @@ int main(int argc, char** argv) {
   const std::int64_t ticks = argc > 1 ? std::atoll(argv[1]) * kTickHz : kTicks;
   BacklashConfig bc;
   bc.alpha = Scale::Quantize(1.0);
-  bc.c_right = Angle::Quantize(1.0 * kPi / 180);
-  bc.c_left = Angle::Quantize(-1.0 * kPi / 180);
+  bc.c_right = Angle::Quantize(1.0 * std::numbers::pi / 180);
+  bc.c_left = Angle::Quantize(-1.0 * std::numbers::pi / 180);
   BacklashModel::State bs;
   BacklashModel backlash(&bc, &bs);
   const Stiffness k_sea = Stiffness::Quantize(0.63);
@@ -92,8 +92,9 @@ int main(int argc, char** argv) {
                      k_sea.ToDouble(), 501);
   EnergyAccumulator net, positive;
   double ref_net = 0, ref_positive = 0, worst_lsb = 0;
-  const double amp = 25.0 * kPi / 180, w = 2 * kPi * 0.5, k_if = 3.1, b_if = 0.18;
-  const double counts_per_rad = 2048.0 * 100 / (2 * kPi);
+  const double amp = 25.0 * std::numbers::pi / 180, w = 2 * std::numbers::pi * 0.5,
+               k_if = 3.1, b_if = 0.18;
+  const double counts_per_rad = 2048.0 * 100 / (2 * std::numbers::pi);
   backlash.Reset(Angle{}, Angle{});
   est.Reset(Angle{});
   for (std::int64_t i = 0; i < ticks; ++i) {
@@ -103,12 +104,14 @@ int main(int argc, char** argv) {
     const double theta = amp * std::sin(w * t);
     const double tau = k_if * theta + b_if * amp * w * std::cos(w * t);
     const double cable = theta + tau / 0.63;
-    const double motor_rad = cable + (std::cos(w * t) >= 0 ? 1.0 : -1.0) * kPi / 180;
+    const double motor_rad =
+        cable + (std::cos(w * t) >= 0 ? 1.0 : -1.0) * std::numbers::pi / 180;
     const auto count =
         static_cast<std::int64_t>(std::llround(motor_rad * counts_per_rad));
     const Angle motor = motor_encoder.Update(static_cast<std::uint16_t>(count & 0xFFFF));
     const auto jcount = static_cast<std::uint16_t>(
-        static_cast<std::int32_t>(std::lround(theta / (2 * kPi) * 16384)) & 0x3FFF);
+        static_cast<std::int32_t>(std::lround(theta / (2 * std::numbers::pi) * 16384)) &
+        0x3FFF);
     const Angle joint = DecodeJointFrame(EncodeJointFrame(jcount, false), jc).angle;
 
     const Angle cable_fixed = backlash.Update(motor);

@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 #include "mjc/plant/params.h"
 #include "mjc/sim/scenarios.h"
@@ -24,13 +25,13 @@
 int main() {
   using namespace mjc;
   using namespace mjc::sim;
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  constexpr double kDeg = std::numbers::pi / 180.0;
   plant::PlantParams robot = plant::LoadPlantParams("default");
   robot.integration.max_step_s = 100e-6;  // mjc-paper's substep: one a tick
 
   const auto start = std::chrono::steady_clock::now();
   SimBoard board(robot, app::DefaultJointConfig());
-  SweepConfig sweep;
+  RampedSineConfig sweep;
   sweep.end_amplitude = Angle::Quantize(30.0 * kDeg);
   sweep.frequency = Frequency::FromDouble(0.5);
   sweep.repetitions = 10;

@@ -4,8 +4,10 @@
 # detected by list and monitor, refused by the commands that address it (exit 7); the
 # --json outputs read by jq; the command line's one-line errors; a trial's new output
 # folder, its run.json read back by mjc report, and an --out that would overwrite an
-# earlier run refused. Every wait is for an event (checks.sh); the boards keep real
-# time (--speed 1) and the tools' own waits follow the boards' clocks.
+# earlier run refused; mjc param's dump, set and restore round trip, its files refused
+# whole, and a restore refused during a trial. Every wait is for an event (checks.sh);
+# the boards keep real time (--speed 1) and the tools' own waits follow the boards'
+# clocks.
 # usage: lab_tools.sh <path of mjc>
 set -u
 mjc=$(realpath "$1")
@@ -77,6 +79,62 @@ check "an --out that holds a run is refused, exit 1, before the bus" \
   refuses 1 used.err "$mjc" trial --iface vcan0 --node 2 --out "${dir:-.}"
 check "  saying why and what to do" grep -q "is not empty (report.md, run.json, windows.csv): a run never overwrites another; .*--force" used.err
 check "  and the earlier run is untouched" cmp windows.before "${dir:-.}/windows.csv"
+
+# Parameters: node 1's dumped, two of them set (one between the steps of its format),
+# files refused whole with nothing sent, the dump restored and read back; node 2's
+# restore refused while a trial runs on it.
+check "mjc param dump writes node 1's parameters" \
+  "$mjc" param dump --iface vcan0 --node 1 -o params1.json
+check "  this protocol, the node, its build, the board's values in the list's units" \
+  jq -e ".protocol_version == 1 and .node == 1 and (.build | startswith(\"$build\")) and .params.heartbeat_hz == 10 and .params.telemetry_angles_hz == 1000 and .params.position_kp == 40 and .read_only.calibrated == 0 and .read_only.protocol_version == 1" params1.json
+"$mjc" param set --iface vcan0 --node 1 telemetry_torque_hz=20 position_kp=0.1 >set.out 2>set.err
+status=$?
+check "mjc param set writes two parameters and reads them back (exit $status)" test "$status" -eq 0
+check "  saying what a value between steps will be stored as" grep -qx \
+  "mjc param set: warning: position_kp: 0.1 will be stored as 0.100006103515625 (the nearest step of 1/65536)" set.err
+check "  and what the board holds" grep -qx "node 1: position_kp = 0.100006103515625 1/rad" set.out
+held() {  # what node 1 holds of the two: both as set
+  "$mjc" param get --iface vcan0 --node 1 position_kp telemetry_torque_hz --json |
+    jq -se 'length == 2 and .[0].raw == 6554 and .[0].value == 0.100006103515625 and .[1].value == 20'
+}
+check "mjc param get --json reads them back" held
+jq '.protocol_version = 2' params1.json >v2.json
+check "a dump of another protocol version is refused: one line, exit 1" \
+  refuses 1 v2.err "$mjc" param restore --iface vcan0 --node 1 v2.json
+check "  saying so; nothing sent" grep -q \
+  "^mjc param restore: v2.json: dumped under protocol version 2, and this mjc speaks 1: .*; nothing was sent$" v2.err
+jq '.params.posiion_kp = 1' params1.json >misspelt.json
+check "an unknown key is refused with a did-you-mean" \
+  refuses 1 misspelt.err "$mjc" param restore --iface vcan0 --node 1 misspelt.json
+check "  naming it" grep -q "misspelt.json: unknown key 'params.posiion_kp' (did you mean 'params.position_kp'?); nothing was sent$" misspelt.err
+jq '.params.calibration_alpha = 1' params1.json >readonly.json
+check "a read-only key to write is refused" \
+  refuses 1 readonly.err "$mjc" param restore --iface vcan0 --node 1 readonly.json
+check "  naming it" grep -q "readonly.json: params.calibration_alpha is read-only: " readonly.err
+jq '.params.heartbeat_hz = 20000' params1.json >range.json
+check "a value out of range is refused" \
+  refuses 1 range.err "$mjc" param restore --iface vcan0 --node 1 range.json
+check "  with its range" grep -q "range.json: params.heartbeat_hz: 20000 is outside 0..10000 Hz; nothing was sent$" range.err
+check "  nothing was sent: node 1 holds what was set" held
+"$mjc" param restore --iface vcan0 --node 1 params1.json >restore.out 2>restore.err
+status=$?
+check "mjc param restore brings the dump back (exit $status)" test "$status" -eq 0
+check "  the two set ones changed, all read back" grep -qE \
+  "^node 1: [0-9]+ parameters restored from params1.json \(2 changed, [0-9]+ already held\); read back identical$" restore.out
+check "  a second dump holds every value of the first" sh -c "'$mjc' param dump --iface vcan0 --node 1 -o params1b.json >/dev/null && jq -en --slurpfile a params1.json --slurpfile b params1b.json '\$a[0].params == \$b[0].params and \$a[0].read_only == \$b[0].read_only'"
+check "mjc param dump of node 2" "$mjc" param dump --iface vcan0 --node 2 -o params2.json
+"$mjc" trial --iface vcan0 --node 2 --protocol amplitude --amplitudes 10 --reps 50 \
+  --frequency-hz 0.5 --rest-s 0.2 --out long --no-figure >long.out 2>long.err &
+long=$!
+check "a long trial runs on node 2" wait_for long.err "repetition 1/50"
+check "mjc param restore refuses while it runs: exit 4, one line" \
+  refuses 4 busy.err "$mjc" param restore --iface vcan0 --node 2 params2.json
+check "  saying why; nothing sent" grep -qx \
+  "mjc param restore: node 2 is running (a trial or a stream): the board takes control parameters only while idle; nothing was sent" busy.err
+kill -INT "$long"
+wait "$long"
+status=$?
+check "  the trial, interrupted, stops the board (exit $status)" test "$status" -eq 6
 
 # A third board answering with node 2's id.
 "$mjc" sim --iface vcan0 --node 2 2>sim3.err &

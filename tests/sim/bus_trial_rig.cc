@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <mutex>
+#include <numbers>
 #include <thread>
 
 #include "mjc/plant/params.h"
@@ -124,7 +125,7 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
 
   host::BoardClient client(host_link.get(), 1);
   TrialConfig config;
-  config.amplitude = Angle::Quantize(15.0 * 3.14159265358979323846 / 180.0);
+  config.amplitude = Angle::Quantize(15.0 * std::numbers::pi / 180.0);
   config.frequency_mHz = 500;
   config.repetitions = 5;
   config.rest_100ms = 5;

@@ -17,6 +17,7 @@
 #include <cmath>
 
 #include "bus_trial_rig.h"
+#include "mjc/host/report.h"
 
 namespace {
 
@@ -26,9 +27,10 @@ using namespace mjc::bus_trial;
 
 // The middle three flexions against the plant's truth over the same ticks.
 void ExpectWindowsMatchTruth(const BoardRun& run) {
-  const auto flexions = host::MiddleFlexions(run.trial.windows, 5);
+  const auto flexions = host::AnalysedFlexions(run.trial.windows, 5);
   ASSERT_EQ(flexions.size(), 3u);
-  for (const host::BoardWindow& w : flexions) {
+  for (const host::BoardWindow* analysed : flexions) {
+    const host::BoardWindow& w = *analysed;
     ASSERT_LT(w.end_tick, run.truth_energy.size());
     const double load = run.truth_energy[w.peak_tick] - run.truth_energy[w.start_tick];
     const double unload = run.truth_energy[w.end_tick] - run.truth_energy[w.peak_tick];

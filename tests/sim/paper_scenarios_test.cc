@@ -25,8 +25,8 @@ plant::PlantParams Robot(double max_step_s = kPaperStep_s) {
   return p;
 }
 
-SweepConfig CalibrationSweep() {
-  SweepConfig s;
+RampedSineConfig CalibrationSweep() {
+  RampedSineConfig s;
   s.end_amplitude = Angle::Quantize(30.0 * kDeg);
   s.frequency = Frequency::FromDouble(0.5);
   s.repetitions = 10;
@@ -108,7 +108,7 @@ TEST(SimTrial, ElasticInterfaceReadsNoLoss) {
   for (double amplitude : {11.0, 25.0}) {
     const TrialOutcome t = RunTrial(bench.board, PaperSine(amplitude), false);
     ASSERT_FALSE(t.faulted) << t.fault;
-    const auto flexions = AnalysedFlexions(t, 5);
+    const auto flexions = host::AnalysedFlexions(t.windows, 5);
     ASSERT_EQ(flexions.size(), 3u);
     for (const WindowOutcome* w : flexions) {
       EXPECT_LE(std::fabs(w->eta), 1.0) << amplitude << "°: board η " << w->eta;
@@ -130,7 +130,7 @@ TEST(SimTrial, ResultsDoNotDependOnThePlantSubstep) {
     ASSERT_TRUE(bench.calibration.uploaded);
     bench.board.plant().SetInterface(plant::LoadPlantParams("subject2").interface);
     const TrialOutcome t = RunTrial(bench.board, PaperSine(20), false);
-    for (const WindowOutcome* w : AnalysedFlexions(t, 5))
+    for (const WindowOutcome* w : host::AnalysedFlexions(t.windows, 5))
       loads[i].push_back(w->truth_load);
   }
   ASSERT_EQ(loads[0].size(), 3u);
@@ -181,7 +181,7 @@ TEST(SimTrial, IndependentTrialsAreTheSameOnAnyNumberOfThreads) {
   for (std::size_t i = 0; i < specs.size(); ++i) {
     SCOPED_TRACE(specs[i].label);
     ASSERT_FALSE(serial[i].faulted) << serial[i].fault;
-    EXPECT_EQ(AnalysedFlexions(serial[i], 5).size(), 3u);
+    EXPECT_EQ(host::AnalysedFlexions(serial[i].windows, 5).size(), 3u);
     EXPECT_EQ(Flatten(parallel[i]), Flatten(serial[i]));  // bit for bit
   }
   EXPECT_FALSE(serial[0].trace.empty());

@@ -58,9 +58,8 @@ using mjc::plant::SensorFault;
 using mjc::plant::SensorFaultKind;
 using mjc::plant::Truth;
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kTick_s = 1e-4;  // the 10 kHz control tick
-constexpr double kDeg = kPi / 180.0;
+constexpr double kDeg = std::numbers::pi / 180.0;
 const std::array<double, 6> kAmplitudesDeg = {6, 8, 11, 15, 20, 25};
 
 // A parameter set with the sensor noise off (unit tests are exact).
@@ -103,7 +102,8 @@ SineRun RunSine(const PlantParams& params, double amplitude_deg) {
   double e_start = 0, e_peak = 0, u_start = 0;
   for (long n = 1; n <= 5 * kTicksPerCycle; ++n) {
     const double t = static_cast<double>(n) * kTick_s;
-    plant.StepPrescribedMotor(amplitude * std::sin(2.0 * kPi * 0.5 * t), kTick_s);
+    plant.StepPrescribedMotor(amplitude * std::sin(2.0 * std::numbers::pi * 0.5 * t),
+                              kTick_s);
     const Truth& truth = plant.truth();
     const long k = n % kTicksPerCycle;
     const long cycle = n / kTicksPerCycle;
@@ -319,7 +319,7 @@ TEST(PlantEnergy, BalancesUnderClosedLoopDutyWithBridgeOffPhases) {
   double peak_current = 0.0;
   for (int n = 1; n <= 40000; ++n) {
     const double t = n * kTick_s;
-    const double setpoint = 20.0 * kDeg * std::sin(kPi * t);
+    const double setpoint = 20.0 * kDeg * std::sin(std::numbers::pi * t);
     const double angle = encoder.Update(plant.MotorCount()).ToDouble();
     const double speed = (angle - previous) / kTick_s;
     previous = angle;
@@ -339,7 +339,8 @@ TEST(PlantEnergy, BalancesUnderClosedLoopDutyWithBridgeOffPhases) {
 TEST(PlantEnergy, BalancesUnderOpenLoopDutySinusoidRobotAlone) {
   Plant plant(Quiet("default"));
   for (int n = 1; n <= 30000; ++n) {
-    plant.Step(0.12 * std::sin(2.0 * kPi * 1.0 * n * kTick_s), true, kTick_s);
+    plant.Step(0.12 * std::sin(2.0 * std::numbers::pi * 1.0 * n * kTick_s), true,
+               kTick_s);
   }
   ExpectBalanced(plant.truth(), "open loop");
   EXPECT_EQ(plant.truth().dissipated.interface_J, 0.0);
@@ -349,7 +350,8 @@ TEST(PlantEnergy, BalancesUnderOpenLoopDutySinusoidRobotAlone) {
 TEST(PlantEnergy, BalancesUnderThePrescribedPulley) {
   Plant plant(Quiet("subject3"));
   for (int n = 1; n <= 40000; ++n) {
-    plant.StepPrescribedMotor(25.0 * kDeg * std::sin(kPi * n * kTick_s), kTick_s);
+    plant.StepPrescribedMotor(25.0 * kDeg * std::sin(std::numbers::pi * n * kTick_s),
+                              kTick_s);
   }
   const Truth& t = plant.truth();
   EXPECT_EQ(t.electrical_energy_J, 0.0);
@@ -370,7 +372,8 @@ TEST(PlantEnergy, BalancesAcrossModeSwitchesReDonningAndTheStandardLinearSolid) 
   p.interface.damping_Nm_s_per_rad = 0.05;
   Plant plant(p);
   for (int n = 1; n <= 10000; ++n) {
-    plant.StepPrescribedMotor(15.0 * kDeg * std::sin(kPi * n * kTick_s), kTick_s);
+    plant.StepPrescribedMotor(15.0 * kDeg * std::sin(std::numbers::pi * n * kTick_s),
+                              kTick_s);
   }
   for (int n = 1; n <= 10000; ++n) plant.Step(0.1, true, kTick_s);
   plant.SetInterface(mjc::plant::Redon(LoadPlantParams("subject2"), 3).interface);
@@ -503,7 +506,7 @@ double PlayOperatorDeviation(const PlantParams& p, double* joint_deviation,
   for (int n = 1; n <= 80000; ++n) {  // 8 s: 4 cycles, 3° → 24°
     const double t = n * kTick_s;
     const double amplitude = (3.0 + 21.0 * t / 8.0) * kDeg;
-    const double motor = amplitude * std::sin(kPi * t);
+    const double motor = amplitude * std::sin(std::numbers::pi * t);
     plant.StepPrescribedMotor(motor, kTick_s);
     const double lower = alpha * (motor - p.cable.c_right_rad);
     const double upper = alpha * (motor - p.cable.c_left_rad);
@@ -542,7 +545,8 @@ TEST(PlantPlayOperator, EmergesOnTheRobotAlone) {
   // 0.54 rad/s) and the joint lags it by about v/ω_n (2.6 mrad) before it rings down.
   const double omega_n = std::sqrt(p.sea.Stiffness() / p.joint.inertia_kg_m2);
   const double pickup_speed =
-      kPi * std::sqrt(2.0 * (p.cable.c_right_rad - p.cable.c_left_rad) * 24.0 * kDeg);
+      std::numbers::pi *
+      std::sqrt(2.0 * (p.cable.c_right_rad - p.cable.c_left_rad) * 24.0 * kDeg);
   EXPECT_LT(joint, bound + pickup_speed / omega_n);
   EXPECT_GT(joint, 0.5 * pickup_speed / omega_n);
 }
@@ -579,7 +583,7 @@ void MoveTo(Plant& plant, double angle) {
 TEST(PlantSensors, MotorCountIsTheFlooredShaftAngle) {
   PlantParams p = Quiet("default");
   Plant plant(p);
-  const double counts_per_pulley_rad = 2048.0 * 100.0 / (2.0 * kPi);
+  const double counts_per_pulley_rad = 2048.0 * 100.0 / (2.0 * std::numbers::pi);
   for (const double angle : {0.0, 1e-6, -1e-6, 0.01, -0.25, 0.3}) {
     plant.Reset();
     MoveTo(plant, angle);
@@ -608,10 +612,11 @@ TEST(PlantSensors, FirmwareDecodesTheMotorCountAcrossWraps) {
   mjc::MotorEncoder encoder(&config, &state);
   ASSERT_EQ(encoder.Reconfigure(), mjc::MotorEncoderConfigError::kOk);
   encoder.Reset(plant.MotorCount());
-  const double count_rad = 2.0 * kPi / (2048.0 * 100.0);
+  const double count_rad = 2.0 * std::numbers::pi / (2048.0 * 100.0);
   double worst = 0.0;
   for (int n = 1; n <= 20000; ++n) {  // ±1.5 pulley turns: ±4.7 timer wraps each way
-    const double angle = 1.5 * 2.0 * kPi * std::sin(2.0 * kPi * 0.5 * n * kTick_s);
+    const double angle = 1.5 * 2.0 * std::numbers::pi *
+                         std::sin(2.0 * std::numbers::pi * 0.5 * n * kTick_s);
     plant.StepPrescribedMotor(angle, kTick_s);
     const double read = encoder.Update(plant.MotorCount()).ToDouble();
     const double error = angle - read;
@@ -626,11 +631,12 @@ TEST(PlantSensors, JointFrameIsAValidRoundedAs5047pFrame) {
   PlantParams p = Quiet("default");
   Plant plant(p);
   const mjc::JointEncoderConfig config;
-  const double count_rad = 2.0 * kPi / 16384.0;
+  const double count_rad = 2.0 * std::numbers::pi / 16384.0;
   double worst = 0.0;
   // Sweep the joint (it follows the cable side without a human) over ±3 rad.
   for (int n = 1; n <= 20000; ++n) {
-    plant.StepPrescribedMotor(3.0 * std::sin(2.0 * kPi * 0.25 * n * kTick_s), kTick_s);
+    plant.StepPrescribedMotor(3.0 * std::sin(2.0 * std::numbers::pi * 0.25 * n * kTick_s),
+                              kTick_s);
     const std::uint16_t frame = plant.JointFrame();
     ASSERT_EQ(Popcount(frame) % 2, 0) << frame;
     ASSERT_EQ(frame & mjc::kJointFrameErrorFlagBit, 0) << frame;
@@ -915,7 +921,7 @@ TEST(PlantPaperFidelity, ReproducesTheRk4ReferenceUnderAClosedMotorLoop) {
   double previous = 0.0;
   for (int n = 1; n <= 40000; ++n) {
     const double t = n * kTick_s;
-    const double setpoint = 20.0 * kDeg * std::sin(kPi * t);
+    const double setpoint = 20.0 * kDeg * std::sin(std::numbers::pi * t);
     const double angle = encoder.Update(plant.MotorCount()).ToDouble();
     const double speed = (angle - previous) / kTick_s;
     previous = angle;

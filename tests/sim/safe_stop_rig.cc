@@ -23,7 +23,6 @@ using protocol::CanFrame;
 using protocol::CommandCode;
 using protocol::CommandOutcomeCode;
 
-constexpr double kPi = std::numbers::pi;
 constexpr std::uint8_t kNode = 1;
 // The rig's host session: its motions are supervised by its heartbeats.
 constexpr protocol::SessionId kSession = 0x5EED;
@@ -31,7 +30,7 @@ constexpr protocol::SessionId kSession = 0x5EED;
 // The trial: the paper's 25° at 0.5 Hz, 200 ms of rest first. On subject1 it swings
 // the motor pulley ±0.435 rad, the joint ±0.053 rad, the SEA torque ±0.23 N·m and the
 // joint velocity ±0.167 rad/s (plant truth).
-constexpr double kAmplitudeRad = 25.0 * kPi / 180.0;
+constexpr double kAmplitudeRad = 25.0 * std::numbers::pi / 180.0;
 constexpr std::uint8_t kRest100ms = 2;
 constexpr std::uint32_t kRestTicks = 2000;  // kRest100ms at 10 kHz
 
@@ -109,7 +108,7 @@ class SampleReference {
       joint_count_ = static_cast<std::uint16_t>(s.joint_frame & 0x3FFFu);
       int c = (joint_count_ - config_.joint_encoder.zero_offset) & 0x3FFF;
       if (c >= 8192) c -= 16384;
-      joint_ = c * 2.0 * kPi / 16384.0;
+      joint_ = c * 2.0 * std::numbers::pi / 16384.0;
     }
     const MotorEncoderConfig& m = config_.motor_encoder;
     if (!seeded_) {
@@ -120,7 +119,8 @@ class SampleReference {
       motor_count_ += static_cast<std::int16_t>(s.motor_count - last_raw_motor_);
     }
     last_raw_motor_ = s.motor_count;
-    motor_ = static_cast<double>(motor_count_) * 2.0 * kPi * m.gear_denominator /
+    motor_ = static_cast<double>(motor_count_) * 2.0 * std::numbers::pi *
+             m.gear_denominator /
              (static_cast<double>(m.counts_per_rev) * m.gear_numerator);
     const BacklashConfig& b = config_.backlash;
     const double lower = b.alpha.ToDouble() * (motor_ - b.c_right.ToDouble());
@@ -430,7 +430,8 @@ class Rig {
     if (streaming_ && next_tick_ >= next_setpoint_tick_) {
       const double t = static_cast<double>(next_tick_ - stream_start_tick_) / hz;
       protocol::Setpoint s;
-      s.position = Angle::Quantize(kAmplitudeRad * std::sin(2 * kPi * 0.5 * t));
+      s.position =
+          Angle::Quantize(kAmplitudeRad * std::sin(2 * std::numbers::pi * 0.5 * t));
       s.sequence = ++setpoint_sequence_;
       Send(s);
       if (!bus_.down) last_setpoint_rx_ = now();
@@ -774,7 +775,7 @@ Measurement Measure(FaultCase c) {
   const double from = rig.board().plant().truth().motor_pulley_angle_rad;
   for (std::uint32_t i = 1; i <= kHandReturnTicks + kHandHoldTicks; ++i) {
     const double f = std::min(1.0, static_cast<double>(i) / kHandReturnTicks);
-    const double pulley = from * 0.5 * (1 + std::cos(kPi * f));
+    const double pulley = from * 0.5 * (1 + std::cos(std::numbers::pi * f));
     tick_latched(&pulley);
   }
   rig.board().plant().ClearFaults();

@@ -127,11 +127,6 @@ void CanNode::HandleFrame(const CanFrame& frame) {
     case Function::kIsoTpToBoard:
       HandleIsoTp(frame);
       return;
-    case Function::kStopAll: {  // addressed to one node: no broadcast, refused
-      protocol::StopAll s;
-      (void)count(Decode(frame, &s));
-      return;
-    }
     case Function::kBootHold: {
       if (!config_.bootloader) {
         ++counters_.ignored;
@@ -139,6 +134,11 @@ void CanNode::HandleFrame(const CanFrame& frame) {
       }
       protocol::BootHold h;
       if (count(Decode(frame, &h))) HandleBootHold(h);
+      return;
+    }
+    case Function::kStopAll: {  // addressed to one node: no broadcast, refused
+      protocol::StopAll s;
+      (void)count(Decode(frame, &s));
       return;
     }
     case Function::kHostHeartbeat: {
@@ -192,7 +192,7 @@ void CanNode::HandleCommand(const protocol::Command& c) {
         o = {CommandOutcomeCode::kRefusedInvalid, 0};
         break;
       }
-      auto sweep = Oscillation<mjc::SweepConfig>(sweep_, hz);
+      auto sweep = Oscillation<RampedSineConfig>(sweep_, hz);
       sweep.end_amplitude = sweep_.end_amplitude;
       o = WindowReportable(sweep.frequency, hz)
               ? app_->StartCalibrationSweep(sweep, tag)

@@ -25,8 +25,8 @@ const ControlConfig& JointApp::config() const {
   return main_config_;
 }
 
-CommandOutcome JointApp::Submit(const Command& command) {
-  if (!commands_.Push(command)) return {CommandOutcomeCode::kRefusedBusy, 0};
+CommandOutcome JointApp::Submit(const Request& request) {
+  if (!requests_.Push(request)) return {CommandOutcomeCode::kRefusedBusy, 0};
   return {};
 }
 
@@ -48,8 +48,8 @@ CommandOutcome JointApp::Configure(const ControlConfig& config, RequestTag tag) 
     return {CommandOutcomeCode::kRefusedNotIdle, 0};
   const ControlConfigError error = ControlTick::Validate(config);
   if (error != ControlConfigError::kOk) return Invalid(error);
-  Command c;
-  c.kind = CommandKind::kConfigure;
+  Request c;
+  c.kind = RequestKind::kConfigure;
   c.tag = tag;
   c.config = config;
   return Submit(c);
@@ -60,8 +60,8 @@ CommandOutcome JointApp::SetCalibration(const Calibration& calibration, RequestT
     return {CommandOutcomeCode::kRefusedNotIdle, 0};
   const CalibrationError error = Validate(calibration);
   if (error != CalibrationError::kOk) return Invalid(error);
-  Command c;
-  c.kind = CommandKind::kSetCalibration;
+  Request c;
+  c.kind = RequestKind::kSetCalibration;
   c.tag = tag;
   c.calibration = calibration;
   return Submit(c);
@@ -74,22 +74,23 @@ CommandOutcome JointApp::StartTrial(const SineConfig& sine, RequestTag tag) {
   }
   const TrajectoryError error = Validate(sine);
   if (error != TrajectoryError::kOk) return Invalid(error);
-  Command c;
-  c.kind = CommandKind::kStartTrial;
+  Request c;
+  c.kind = RequestKind::kStartTrial;
   c.tag = tag;
   c.sine = sine;
   return Submit(c);
 }
 
-CommandOutcome JointApp::StartCalibrationSweep(const SweepConfig& sweep, RequestTag tag) {
+CommandOutcome JointApp::StartCalibrationSweep(const RampedSineConfig& sweep,
+                                               RequestTag tag) {
   if (const CommandOutcome o = CheckStart(false);
       o.result != CommandOutcomeCode::kAccepted) {
     return o;
   }
   const TrajectoryError error = Validate(sweep);
   if (error != TrajectoryError::kOk) return Invalid(error);
-  Command c;
-  c.kind = CommandKind::kStartSweep;
+  Request c;
+  c.kind = RequestKind::kStartSweep;
   c.tag = tag;
   c.sweep = sweep;
   return Submit(c);
@@ -102,23 +103,23 @@ CommandOutcome JointApp::StartStream(AngularVelocity max_rate, RequestTag tag) {
   }
   const TrajectoryError error = ValidateStreamRate(max_rate, config().tick_hz);
   if (error != TrajectoryError::kOk) return Invalid(error);
-  Command c;
-  c.kind = CommandKind::kStartStream;
+  Request c;
+  c.kind = RequestKind::kStartStream;
   c.tag = tag;
   c.stream_rate = max_rate;
   return Submit(c);
 }
 
 CommandOutcome JointApp::Stop(RequestTag tag) {
-  Command c;
-  c.kind = CommandKind::kStop;
+  Request c;
+  c.kind = RequestKind::kStop;
   c.tag = tag;
   return Submit(c);
 }
 
 CommandOutcome JointApp::ClearFaults(RequestTag tag) {
-  Command c;
-  c.kind = CommandKind::kClearFaults;
+  Request c;
+  c.kind = RequestKind::kClearFaults;
   c.tag = tag;
   return Submit(c);
 }
@@ -169,11 +170,11 @@ void JointApp::ISR_Enter(BoardState next) {
   events_.Push(e);
 }
 
-void JointApp::ISR_ApplyCommand() {
+void JointApp::ISR_ApplyRequest() {
   // Read in place: an empty mailbox costs two loads, a command no copy.
-  const Command* c = commands_.Front();
+  const Request* c = requests_.Front();
   if (c == nullptr) return;
-  if (c->kind == CommandKind::kClearFaults && state_ == BoardState::kFault) {
+  if (c->kind == RequestKind::kClearFaults && state_ == BoardState::kFault) {
     // Judged in this tick's step, on this tick's sample; answered in ISR_AfterStep.
     control_.RequestClearFaults();
     clear_pending_ = true;
@@ -181,16 +182,16 @@ void JointApp::ISR_ApplyCommand() {
   } else {
     ISR_Done(c->tag, ISR_Apply(*c));
   }
-  commands_.DropFront();
+  requests_.DropFront();
 }
 
-CommandOutcome JointApp::ISR_Apply(const Command& c) {
+CommandOutcome JointApp::ISR_Apply(const Request& c) {
   const bool idle = state_ == BoardState::kIdle;
   switch (c.kind) {
-    case CommandKind::kConfigure:
-    case CommandKind::kSetCalibration: {
+    case RequestKind::kConfigure:
+    case RequestKind::kSetCalibration: {
       if (!idle) return {CommandOutcomeCode::kRefusedNotIdle, 0};
-      const bool calibration = c.kind == CommandKind::kSetCalibration;
+      const bool calibration = c.kind == RequestKind::kSetCalibration;
       // Validated when submitted; Configure checks again, so nothing unchecked runs.
       const ControlConfigError error = control_.Configure(
           calibration ? c.calibration.AppliedTo(control_.config()) : c.config);
@@ -200,9 +201,9 @@ CommandOutcome JointApp::ISR_Apply(const Command& c) {
                                std::memory_order_release);
       return {};
     }
-    case CommandKind::kStartTrial:
-    case CommandKind::kStartSweep: {
-      const bool trial = c.kind == CommandKind::kStartTrial;
+    case RequestKind::kStartTrial:
+    case RequestKind::kStartSweep: {
+      const bool trial = c.kind == RequestKind::kStartTrial;
       if (const CommandOutcome o = CheckStart(trial, state_, calibrated_);
           o.result != CommandOutcomeCode::kAccepted) {
         return o;
@@ -213,7 +214,7 @@ CommandOutcome JointApp::ISR_Apply(const Command& c) {
       ISR_Enter(trial ? BoardState::kRunning : BoardState::kCalibrating);
       return {};
     }
-    case CommandKind::kStartStream: {
+    case RequestKind::kStartStream: {
       if (const CommandOutcome o = CheckStart(true, state_, calibrated_);
           o.result != CommandOutcomeCode::kAccepted) {
         return o;
@@ -228,11 +229,11 @@ CommandOutcome JointApp::ISR_Apply(const Command& c) {
       ISR_Enter(BoardState::kRunning);
       return {};
     }
-    case CommandKind::kStop:
+    case RequestKind::kStop:
       control_.trajectory().Stop();
       if (state_ != BoardState::kFault) ISR_Enter(BoardState::kIdle);
       return {};
-    case CommandKind::kClearFaults:
+    case RequestKind::kClearFaults:
       return {};  // no fault latched: nothing to clear
   }
   return {};

@@ -7,6 +7,9 @@ namespace {
 
 using protocol::ParamId;
 
+// The protocol this image speaks: a constant, bound like a field.
+constexpr std::uint16_t kImageProtocol = protocol::kVersion;
+
 // Calls visit(field) with the field bound to `id`; false for an unbound id. The one
 // place that names each parameter's field.
 template <class Visit>
@@ -76,6 +79,9 @@ constexpr bool VisitParam(ParamId id, CanNodeConfig& node, ControlConfig& contro
     case ParamId::kBuildId:
       visit(node.identity.build);
       return true;
+    case ParamId::kProtocolVersion:
+      visit(kImageProtocol);
+      return true;
   }
   return false;
 }
@@ -111,6 +117,7 @@ bool SetRaw(std::uint16_t* field, std::int32_t raw) {
   return true;
 }
 bool SetRaw(bool*, std::int32_t) { return false; }
+bool SetRaw(const std::uint16_t*, std::int32_t) { return false; }
 bool SetRaw(std::uint32_t*, std::int32_t) { return false; }
 
 }  // namespace

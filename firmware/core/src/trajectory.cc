@@ -128,7 +128,7 @@ TrajectoryError Validate(const SineConfig& config) {
                              config.tick_rate_hz);
 }
 
-TrajectoryError Validate(const SweepConfig& config) {
+TrajectoryError Validate(const RampedSineConfig& config) {
   return ValidateOscillation(config.neutral, config.start_amplitude, config.end_amplitude,
                              config.frequency, config.repetitions, config.rest_ms,
                              config.tick_rate_hz);
@@ -168,7 +168,7 @@ TrajectoryError TrajectoryGenerator::StartSine(const SineConfig& config) {
                           config.rest_ms, config.tick_rate_hz);
 }
 
-TrajectoryError TrajectoryGenerator::StartSweep(const SweepConfig& config) {
+TrajectoryError TrajectoryGenerator::StartSweep(const RampedSineConfig& config) {
   return StartOscillation(TrajectoryMode::kSweep, config.neutral, config.start_amplitude,
                           config.end_amplitude, config.frequency, config.repetitions,
                           config.rest_ms, config.tick_rate_hz);

@@ -5,13 +5,15 @@
 #include <cmath>
 #include <exception>
 #include <mutex>
+#include <numbers>
 #include <stdexcept>
 #include <thread>
 
+#include "mjc/host/board_client.h"
+#include "mjc/host/describe.h"
+
 namespace mjc::sim {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Ticks the board keeps running after a trial ends, so that windows still inside the
 // estimator's delay line complete.
@@ -39,20 +41,18 @@ double EtaPercent(double load, double unload) {
   return load > 0 ? (1.0 - std::fabs(unload) / load) * 100.0 : 0.0;
 }
 
-std::string FaultName(Fault f) { return "fault " + std::to_string(static_cast<int>(f)); }
-
 }  // namespace
 
 SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions) {
   SineConfig s;
-  s.amplitude = Angle::Quantize(amplitude_deg * kPi / 180.0);
+  s.amplitude = Angle::Quantize(amplitude_deg * std::numbers::pi / 180.0);
   s.frequency = Frequency::FromDouble(0.5);
   s.repetitions = repetitions;
   s.rest_ms = 1500;  // back to back: the paper's 3 s between amplitudes
   return s;
 }
 
-CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
+CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep) {
   CalibrationOutcome out;
   app::JointApp& app = board.app();
   const plant::CableParams& cable = board.plant().params().cable;
@@ -63,12 +63,12 @@ CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
     return out;
   }
   std::vector<double> motor, joint;
-  bool started = false;
+  host::MotionEnd sweep_end(app::BoardState::kCalibrating);
   for (std::uint64_t i = 0; i < 100ull * board.tick_hz() * 60; ++i) {
     board.Tick();
     const Telemetry& t = app.last().telemetry;
-    if (app.state() == app::BoardState::kCalibrating) started = true;
-    if (started) {
+    const bool over = sweep_end.Over(app.state());
+    if (sweep_end.started()) {
       motor.push_back(t.motor.ToDouble());
       joint.push_back(t.joint.ToDouble());
       if (motor.size() % 10 == 0) {
@@ -77,10 +77,11 @@ CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
       }
     }
     if (app.state() == app::BoardState::kFault) {
-      out.message = "the sweep faulted: " + FaultName(app.control().fault());
+      out.message =
+          "the sweep faulted: fault " + host::DescribeFault(app.control().fault());
       return out;
     }
-    if (started && app.state() == app::BoardState::kIdle) break;
+    if (over) break;
   }
   // The joint trails the cable side by a few ms on the robot alone (the SEA spring
   // against the joint's damping): fit that lag too, or it reads as extra slack.
@@ -88,8 +89,10 @@ CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep) {
   options.fit_lag = true;
   options.sample_rate_hz = board.tick_hz();
   out.fit = host::FitBacklash(motor, joint, options);
-  out.error_right_deg = (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / kPi;
-  out.error_left_deg = (out.fit.c_left_rad - out.true_c_left_rad) * 180.0 / kPi;
+  out.error_right_deg =
+      (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / std::numbers::pi;
+  out.error_left_deg =
+      (out.fit.c_left_rad - out.true_c_left_rad) * 180.0 / std::numbers::pi;
   std::string why;
   const auto config = host::ToFirmwareConfig(out.fit, &why);
   if (!config) {
@@ -135,7 +138,7 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
     WindowSummary w;
   };
   std::vector<BoardWindow> windows;
-  bool running = false;
+  host::MotionEnd trial_end(app::BoardState::kRunning);
   std::uint32_t flush = 0;
   const std::uint64_t limit = static_cast<std::uint64_t>(board.tick_hz()) * 600;
   for (std::uint64_t i = 0; i < limit; ++i) {
@@ -160,13 +163,11 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
       if (event.kind == app::AppEvent::Kind::kWindow) windows.push_back({event.window});
       if (event.kind == app::AppEvent::Kind::kFault) {
         out.faulted = true;
-        out.fault = FaultName(event.fault);
+        out.fault = "fault " + host::DescribeFault(event.fault);
       }
     }
-    if (app.state() == app::BoardState::kRunning) running = true;
     if (out.faulted) break;
-    if (running && app.state() == app::BoardState::kIdle && ++flush > FlushTicks(board))
-      break;
+    if (trial_end.Over(app.state()) && ++flush > FlushTicks(board)) break;
   }
   out.ticks = static_cast<std::uint32_t>(truth_power.size());
 
@@ -209,22 +210,12 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
   return out;
 }
 
-std::vector<const WindowOutcome*> AnalysedFlexions(const TrialOutcome& trial,
-                                                   std::uint16_t repetitions) {
-  const RepetitionRange keep = MiddleRepetitions(repetitions, 3);
-  std::vector<const WindowOutcome*> out;
-  for (const WindowOutcome& w : trial.windows) {
-    if (w.motion == Motion::kFlexion && keep.Contains(w.repetition)) out.push_back(&w);
-  }
-  return out;
-}
-
 RepeatabilityOutcome SummariseRepeatability(std::vector<TrialOutcome> trials) {
   RepeatabilityOutcome out;
   std::vector<double> all, all_truth;
   for (TrialOutcome& t : trials) {
     std::vector<double> eta, truth_eta;
-    for (const WindowOutcome* w : AnalysedFlexions(t, 5)) {
+    for (const WindowOutcome* w : host::AnalysedFlexions(t.windows, 5)) {
       eta.push_back(w->eta);
       truth_eta.push_back(w->truth_eta);
       all.push_back(w->eta);
@@ -262,7 +253,7 @@ AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& t) {
   AmplitudePoint pt;
   pt.amplitude_deg = amplitude_deg;
   std::vector<double> l, u, n, e, tl, tu, tn, te;
-  for (const WindowOutcome* w : AnalysedFlexions(t, 5)) {
+  for (const WindowOutcome* w : host::AnalysedFlexions(t.windows, 5)) {
     l.push_back(w->load);
     u.push_back(w->unload);
     n.push_back(w->net);

@@ -4,6 +4,7 @@
 // LSB) and the clamp only ever selects the held value or an edge.
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 
 #include "mjc/core/backlash.h"
 #include "vector_test.h"
@@ -16,7 +17,6 @@ using mjc::BacklashModel;
 using mjc::Scale;
 
 constexpr double kLsb = 1.0 / (1 << 24);
-constexpr double kPi = 3.14159265358979323846;
 
 // Double-precision play operator (eq. 4).
 struct ReferencePlay {
@@ -32,8 +32,8 @@ struct ReferencePlay {
 BacklashConfig MakeConfig(double alpha, double c_r_deg, double c_l_deg) {
   BacklashConfig c;
   c.alpha = Scale::Quantize(alpha);
-  c.c_right = Angle::Quantize(c_r_deg * kPi / 180.0);
-  c.c_left = Angle::Quantize(c_l_deg * kPi / 180.0);
+  c.c_right = Angle::Quantize(c_r_deg * std::numbers::pi / 180.0);
+  c.c_left = Angle::Quantize(c_l_deg * std::numbers::pi / 180.0);
   return c;
 }
 
@@ -63,8 +63,8 @@ MJC_VECTOR_TEST(Backlash, IncreasingSinusoidWithinOneLsb) {
   // The paper's calibration input: amplitude rising 0 → 30° over 10 cycles at 0.5 Hz.
   const double worst = WorstError(config, 200000, [](int i) {
     const double t = i * 1e-4;
-    const double amp = (30.0 * kPi / 180.0) * (t / 20.0);
-    return Angle::Quantize(amp * std::sin(2 * kPi * 0.5 * t));
+    const double amp = (30.0 * std::numbers::pi / 180.0) * (t / 20.0);
+    return Angle::Quantize(amp * std::sin(2 * std::numbers::pi * 0.5 * t));
   });
   VT_EXPECT_LE(worst, 1.0);
 }
@@ -88,16 +88,17 @@ MJC_VECTOR_TEST(Backlash, ReversalInsideDeadBandHolds) {
   // Drive positive to 10°: the output follows θ_m − c_r.
   Angle out;
   for (int i = 0; i <= 1000; ++i)
-    out = model.Update(Angle::Quantize(i * 0.01 * kPi / 180));
-  VT_EXPECT_NEAR(out.ToDouble(), 9.0 * kPi / 180, 2 * kLsb);
+    out = model.Update(Angle::Quantize(i * 0.01 * std::numbers::pi / 180));
+  VT_EXPECT_NEAR(out.ToDouble(), 9.0 * std::numbers::pi / 180, 2 * kLsb);
   // Back by 1.5° (less than the 2° slack): the output holds.
   for (int i = 1000; i >= 850; --i) {
-    VT_EXPECT_TRUE(model.Update(Angle::Quantize(i * 0.01 * kPi / 180)) == out);
+    VT_EXPECT_TRUE(model.Update(Angle::Quantize(i * 0.01 * std::numbers::pi / 180)) ==
+                   out);
   }
   // Back past the slack: it follows θ_m − c_l.
   for (int i = 850; i >= 500; --i)
-    out = model.Update(Angle::Quantize(i * 0.01 * kPi / 180));
-  VT_EXPECT_NEAR(out.ToDouble(), 6.0 * kPi / 180, 2 * kLsb);
+    out = model.Update(Angle::Quantize(i * 0.01 * std::numbers::pi / 180));
+  VT_EXPECT_NEAR(out.ToDouble(), 6.0 * std::numbers::pi / 180, 2 * kLsb);
 }
 
 MJC_VECTOR_TEST(Backlash, ResetClampsJointIntoBand) {
@@ -123,7 +124,8 @@ MJC_VECTOR_TEST(Backlash, InverseThenForwardTracksWantedAngle) {
   BacklashModel model(&config, &state);
   double worst = 0;
   for (int i = 0; i < 40000; ++i) {
-    const Angle wanted = Angle::Quantize(0.3 * std::sin(2 * kPi * 0.5 * i * 1e-4));
+    const Angle wanted =
+        Angle::Quantize(0.3 * std::sin(2 * std::numbers::pi * 0.5 * i * 1e-4));
     const Angle motor = inverse.Command(wanted);
     const Angle out = i == 0 ? model.Reset(motor, wanted) : model.Update(motor);
     if (i > 10) {

@@ -7,6 +7,7 @@
 // summed over the tick ranges the board reports (already aligned to the instant).
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 
 #include "mjc/core/control_tick.h"
 #include "vector_test.h"
@@ -15,8 +16,7 @@ namespace {
 
 using namespace mjc;
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kCountsPerRad = 2048.0 * 100 / (2 * kPi);
+constexpr double kCountsPerRad = 2048.0 * 100 / (2 * std::numbers::pi);
 
 struct MiniPlant {
   double k_sea, k_if, b_if, c_r, c_l;
@@ -38,7 +38,8 @@ struct MiniPlant {
     s.motor_count =
         static_cast<std::uint16_t>(std::llround(motor * kCountsPerRad) & 0xFFFF);
     const auto count = static_cast<std::uint16_t>(
-        static_cast<std::int32_t>(std::lround(theta / (2 * kPi) * 16384)) & 0x3FFF);
+        static_cast<std::int32_t>(std::lround(theta / (2 * std::numbers::pi) * 16384)) &
+        0x3FFF);
     s.joint_frame = EncodeJointFrame(count, false);
     return s;
   }
@@ -52,8 +53,8 @@ TickResult StepOf(ControlTick& tick, const Sample& sample) {
 
 ControlConfig PaperConfig() {
   ControlConfig c;
-  c.backlash.c_right = Angle::Quantize(1.0 * kPi / 180);
-  c.backlash.c_left = Angle::Quantize(-1.0 * kPi / 180);
+  c.backlash.c_right = Angle::Quantize(1.0 * std::numbers::pi / 180);
+  c.backlash.c_left = Angle::Quantize(-1.0 * std::numbers::pi / 180);
   c.sea_stiffness = Stiffness::Quantize(0.63);
   return c;
 }
@@ -75,7 +76,7 @@ TrialResult RunTrial(double k_if, double b_if) {
   MiniPlant plant{0.63, k_if, b_if, config.backlash.c_right.ToDouble(),
                   config.backlash.c_left.ToDouble()};
   SineConfig sine;
-  sine.amplitude = Angle::Quantize(25.0 * kPi / 180);
+  sine.amplitude = Angle::Quantize(25.0 * std::numbers::pi / 180);
   sine.frequency = Frequency::Quantize(0.5);
   sine.repetitions = 5;
   sine.rest_ms = 500;
@@ -226,7 +227,7 @@ MJC_VECTOR_TEST(ControlTick, ReconfiguringKeepsTheMotorAngle) {
   // restart from the raw count (+1.9 rad, beyond the motor limit: a false fault).
   static ControlTick tick;
   VT_EXPECT_TRUE(tick.Configure(PaperConfig()) == ControlConfigError::kOk);
-  const double rad_per_count = 2 * kPi / (2048.0 * 100.0);
+  const double rad_per_count = 2 * std::numbers::pi / (2048.0 * 100.0);
   const auto counts = static_cast<std::int32_t>(std::lround(-0.1 / rad_per_count));
   Sample s;
   s.joint_frame = EncodeJointFrame(0, false);

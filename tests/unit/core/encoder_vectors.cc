@@ -11,6 +11,7 @@
 // here), which the checks allow for.
 #include <cstdint>
 #include <limits>
+#include <numbers>
 
 #include "mjc/core/encoder.h"
 #include "mjc/core/quantities.h"
@@ -27,7 +28,6 @@ using mjc::MotorEncoderConfigError;
 using mjc::MotorEncoderState;
 using mjc::vt::Rng;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kLsbPerRad = 16777216.0;  // 2^24
 constexpr double kAngleMaxLsb = 2147483647.0;
 constexpr double kAngleMinLsb = -2147483648.0;
@@ -48,7 +48,7 @@ std::int64_t WrapIndex(std::int64_t x) {
 
 // Angle LSB per count, from the config in double.
 double ReferenceLsbPerCount(const MotorEncoderConfig& c) {
-  return 2.0 * kPi * kLsbPerRad * static_cast<double>(c.gear_denominator) /
+  return 2.0 * std::numbers::pi * kLsbPerRad * static_cast<double>(c.gear_denominator) /
          (static_cast<double>(c.counts_per_rev) * static_cast<double>(c.gear_numerator));
 }
 
@@ -265,8 +265,10 @@ MJC_VECTOR_TEST(MotorEncoderAngle, DirectionAndZeroOffset) {
   VT_EXPECT_EQ(r.CountToAngle(5000).raw(), 0);
   // A quarter pulley turn above the offset is +π/2 forward and -π/2 reversed.
   const std::int64_t quarter = 5000 + 51200;
-  VT_EXPECT_EQ(f.CountToAngle(quarter).raw(), Angle::Quantize(kPi / 2).raw());
-  VT_EXPECT_EQ(r.CountToAngle(quarter).raw(), Angle::Quantize(-kPi / 2).raw());
+  VT_EXPECT_EQ(f.CountToAngle(quarter).raw(),
+               Angle::Quantize(std::numbers::pi / 2).raw());
+  VT_EXPECT_EQ(r.CountToAngle(quarter).raw(),
+               Angle::Quantize(-std::numbers::pi / 2).raw());
   // Through Reset/Update as well.
   f.Reset(TimerCount(5000));
   r.Reset(TimerCount(5000));
@@ -278,8 +280,8 @@ MJC_VECTOR_TEST(MotorEncoderAngle, DirectionAndZeroOffset) {
     r.Update(TimerCount(position));
   }
   VT_EXPECT_EQ(f.extended_count(), 5000 - 51200);
-  VT_EXPECT_EQ(fs.angle.raw(), Angle::Quantize(-kPi / 2).raw());
-  VT_EXPECT_EQ(rs.angle.raw(), Angle::Quantize(kPi / 2).raw());
+  VT_EXPECT_EQ(fs.angle.raw(), Angle::Quantize(-std::numbers::pi / 2).raw());
+  VT_EXPECT_EQ(rs.angle.raw(), Angle::Quantize(std::numbers::pi / 2).raw());
 }
 
 MJC_VECTOR_TEST(MotorEncoderAngle, SaturatesBeyondRangeAndRecovers) {
@@ -409,7 +411,8 @@ MJC_VECTOR_TEST(MotorEncoderConfig, InvalidConfigGivesZeroAngleUntilReconfigured
   VT_EXPECT_TRUE(!state.angle_saturated);
   config.direction = -1;
   VT_EXPECT_TRUE(encoder.Reconfigure() == MotorEncoderConfigError::kOk);
-  VT_EXPECT_EQ(state.angle.raw(), Angle::Quantize(-30000 * 2.0 * kPi / 204800.0).raw());
+  VT_EXPECT_EQ(state.angle.raw(),
+               Angle::Quantize(-30000 * 2.0 * std::numbers::pi / 204800.0).raw());
 }
 
 // ----- Joint encoder -------------------------------------------------------------------
@@ -426,7 +429,8 @@ double ReferenceJointLsb(int count, int offset, int direction) {
   int d = (count - offset) % 16384;
   if (d < 0) d += 16384;
   if (d >= 8192) d -= 16384;
-  return static_cast<double>(direction * d) * (2.0 * kPi / 16384.0) * kLsbPerRad;
+  return static_cast<double>(direction * d) * (2.0 * std::numbers::pi / 16384.0) *
+         kLsbPerRad;
 }
 
 MJC_VECTOR_TEST(JointFrame, StatusNumbersAreStable) {
@@ -540,7 +544,7 @@ MJC_VECTOR_TEST(JointAngle, AllCountsWithinHalfLsbOfDouble) {
         const double err = AbsD(static_cast<double>(s.angle.raw()) - ref);
         worst = err > worst ? err : worst;
         // [-π, π) forward, (-π, π] reversed.
-        const double pi_lsb = kPi * kLsbPerRad;
+        const double pi_lsb = std::numbers::pi * kLsbPerRad;
         const double a = static_cast<double>(s.angle.raw());
         if (direction > 0 ? (a < -pi_lsb - 0.5 || a >= pi_lsb - 0.5)
                           : (a <= -pi_lsb + 0.5 || a > pi_lsb + 0.5)) {
@@ -557,7 +561,7 @@ MJC_VECTOR_TEST(JointAngle, ZeroOffsetWrapsAround) {
   // Offset 16000, count 100: (100 - 16000) mod 16384 = 484 counts past zero.
   const JointEncoderConfig forward{16000, 1};
   const JointEncoderConfig reverse{16000, -1};
-  const double step = 2.0 * kPi / 16384.0;
+  const double step = 2.0 * std::numbers::pi / 16384.0;
   VT_EXPECT_EQ(mjc::JointCountToAngle(100, forward).raw(),
                Angle::Quantize(484 * step).raw());
   VT_EXPECT_EQ(mjc::JointCountToAngle(100, reverse).raw(),
@@ -567,8 +571,10 @@ MJC_VECTOR_TEST(JointAngle, ZeroOffsetWrapsAround) {
                Angle::Quantize(-step).raw());
   // Half a turn away is -π forward (the range's closed end) and +π reversed.
   const std::uint16_t half = (16000 + 8192) % 16384;
-  VT_EXPECT_EQ(mjc::JointCountToAngle(half, forward).raw(), Angle::Quantize(-kPi).raw());
-  VT_EXPECT_EQ(mjc::JointCountToAngle(half, reverse).raw(), Angle::Quantize(kPi).raw());
+  VT_EXPECT_EQ(mjc::JointCountToAngle(half, forward).raw(),
+               Angle::Quantize(-std::numbers::pi).raw());
+  VT_EXPECT_EQ(mjc::JointCountToAngle(half, reverse).raw(),
+               Angle::Quantize(std::numbers::pi).raw());
   // Bits above 13 of the count are ignored.
   VT_EXPECT_EQ(mjc::JointCountToAngle(100 | 0xC000, forward).raw(),
                mjc::JointCountToAngle(100, forward).raw());
@@ -595,7 +601,7 @@ MJC_VECTOR_TEST(JointEncoderConfig, ValidationAndLenientDecoding) {
   VT_EXPECT_TRUE(mjc::DecodeJointFrame(frame, {100, 0}).angle ==
                  mjc::DecodeJointFrame(frame, {100, 1}).angle);
   VT_EXPECT_EQ(mjc::DecodeJointFrame(frame, {100, -5}).angle.raw(),
-               Angle::Quantize(-200 * 2.0 * kPi / 16384.0).raw());
+               Angle::Quantize(-200 * 2.0 * std::numbers::pi / 16384.0).raw());
 }
 
 }  // namespace

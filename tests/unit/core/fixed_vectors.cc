@@ -11,6 +11,7 @@
 // below an output LSB in these formats.
 #include <cstdint>
 #include <limits>
+#include <numbers>
 
 #include "mjc/core/fixed.h"
 #include "mjc/core/quantities.h"
@@ -268,11 +269,10 @@ MJC_VECTOR_TEST(FixedLiteral, ConstevalLiteralsMatchRuntimeQuantize) {
   using namespace mjc::literals;
   static_assert((1.0_rad).raw() == (1 << 24));
   static_assert((-0.5_Nm).raw() == -(1 << 23));
-  static_assert((180.0_deg).raw() ==
-                mjc::Angle::FromDouble(3.14159265358979323846).raw());
+  static_assert((180.0_deg).raw() == mjc::Angle::FromDouble(std::numbers::pi).raw());
   VT_EXPECT_TRUE(0.63_Nm_rad == mjc::Stiffness::Quantize(0.63));
   VT_EXPECT_TRUE(0.0001_s == mjc::Duration::Quantize(0.0001));
-  VT_EXPECT_TRUE(25.0_deg == mjc::Angle::Quantize(25.0 * 3.14159265358979323846 / 180.0));
+  VT_EXPECT_TRUE(25.0_deg == mjc::Angle::Quantize(25.0 * std::numbers::pi / 180.0));
 }
 
 MJC_VECTOR_TEST(FixedInteger, WholeConstructorSaturates) {

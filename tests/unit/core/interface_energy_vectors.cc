@@ -8,6 +8,7 @@
 // so η = 2x/(1 + x) with x = bωπ/(2k); a purely elastic interface (b = 0) gives η = 0.
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 
 #include "mjc/core/encoder.h"
 #include "mjc/core/interface_energy.h"
@@ -18,7 +19,6 @@ namespace {
 
 using namespace mjc;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr std::uint32_t kTickHz = 10000;
 
 MJC_VECTOR_TEST(EnergyScale, SumToJoulesWithinHalfLsb) {
@@ -144,7 +144,7 @@ ChainResult RunChain(double k, double b, int extra_delay) {
   WindowTracker tracker(kTickHz);
   const JointEncoderConfig enc{.zero_offset = 0, .direction = 1};
   const Stiffness sea = Stiffness::Quantize(0.63);
-  const double amp = 25.0 * kPi / 180, w = 2 * kPi * 0.5;
+  const double amp = 25.0 * std::numbers::pi / 180, w = 2 * std::numbers::pi * 0.5;
   const int period = 20000;
   double eta_sum = 0, load_sum = 0;
   int n = 0;
@@ -155,7 +155,8 @@ ChainResult RunChain(double k, double b, int extra_delay) {
     const double tau = k * theta + b * amp * w * std::cos(w * t);
     // 14-bit joint encoder; the cable side follows from the SEA: τ = K(θ̃ − θ).
     const auto count = static_cast<std::uint16_t>(
-        static_cast<std::int32_t>(std::lround(theta / (2 * kPi) * 16384)) & 0x3FFF);
+        static_cast<std::int32_t>(std::lround(theta / (2 * std::numbers::pi) * 16384)) &
+        0x3FFF);
     const Angle joint = DecodeJointFrame(EncodeJointFrame(count, false), enc).angle;
     const Angle cable = Angle::Quantize(theta + tau / sea.ToDouble());
     const Torque torque = Mul<Torque>(sea, cable - joint);
@@ -186,7 +187,7 @@ MJC_VECTOR_TEST(PowerChain, ElasticInterfaceReadsNoLoss) {
   const ChainResult r = RunChain(3.1, 0.0, 0);
   VT_EXPECT_EQ(r.windows, 3);
   VT_EXPECT_LE(std::fabs(r.eta), 0.5);  // points
-  const double amp = 25.0 * kPi / 180;
+  const double amp = 25.0 * std::numbers::pi / 180;
   VT_EXPECT_NEAR(r.loading, 3.1 * amp * amp / 2, 0.01 * 3.1 * amp * amp / 2);
 }
 
@@ -199,11 +200,11 @@ MJC_VECTOR_TEST(PowerChain, MisalignedTorqueWouldReadFalseLoss) {
 }
 
 MJC_VECTOR_TEST(PowerChain, KelvinVoigtMatchesAnalyticEta) {
-  const double k = 3.1, b = 0.18, w = kPi;
-  const double x = b * w * kPi / (2 * k);
+  const double k = 3.1, b = 0.18, w = std::numbers::pi;
+  const double x = b * w * std::numbers::pi / (2 * k);
   const double want_eta = 200 * x / (1 + x);
-  const double amp = 25.0 * kPi / 180;
-  const double want_load = k * amp * amp / 2 + b * amp * amp * w * kPi / 4;
+  const double amp = 25.0 * std::numbers::pi / 180;
+  const double want_load = k * amp * amp / 2 + b * amp * amp * w * std::numbers::pi / 4;
   const ChainResult r = RunChain(k, b, 0);
   VT_EXPECT_EQ(r.windows, 3);
   VT_EXPECT_NEAR(r.eta, want_eta, 0.5);

@@ -28,6 +28,7 @@
 // ambiguous: either decision is correct there, and the reference follows the branch
 // closer to the loop (they are counted, and stay rare).
 #include <cstdint>
+#include <numbers>
 
 #include "mjc/core/position_loop.h"
 #include "mjc/core/quantities.h"
@@ -55,7 +56,7 @@ constexpr double kQ24 = 1.0 / 16777216.0;    // Angle and DutySum LSB
 constexpr double kQ31 = 1.0 / 2147483648.0;  // half an LSB of the Q30 ki / f
 constexpr double kReferenceSlack = 1e-12;    // double rounding of the reference
 constexpr int kSigns[] = {1, -1};
-constexpr double kPulleyCount = 6.283185307179586 / 204800.0;  // 2048 edges, 100:1
+constexpr double kPulleyCount = 2.0 * std::numbers::pi / 204800.0;  // 2048 edges, 100:1
 
 double AbsD(double x) { return x < 0 ? -x : x; }
 double MaxD(double a, double b) { return a > b ? a : b; }

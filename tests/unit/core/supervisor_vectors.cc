@@ -11,6 +11,7 @@
 // here, never read back from the supervisor's state.
 #include <cstdint>
 #include <initializer_list>
+#include <numbers>
 
 #include "mjc/core/encoder.h"
 #include "mjc/core/quantities.h"
@@ -29,9 +30,9 @@ using mjc::SupervisorConfig;
 using mjc::SupervisorInput;
 using mjc::Torque;
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kJointCountRad = 2.0 * kPi / 16384.0;   // 14-bit joint encoder
-constexpr double kMotorCountRad = 2.0 * kPi / 204800.0;  // 2048 edges, 100:1
+constexpr double kJointCountRad =
+    2.0 * std::numbers::pi / 16384.0;  // 14-bit joint encoder
+constexpr double kMotorCountRad = 2.0 * std::numbers::pi / 204800.0;  // 2048 edges, 100:1
 constexpr double kJointCountsPerRad = 1.0 / kJointCountRad;
 constexpr double kMotorCountsPerRad = 1.0 / kMotorCountRad;
 
@@ -583,9 +584,9 @@ MJC_VECTOR_TEST(Supervisor, HealthySlowSinusoidWithSlackRaisesNothing) {
   // Setup
   constexpr int kTicks = 100000;  // 10 s at 10 kHz: one period
   constexpr double kAmplitude = 1.2;
-  constexpr double kOmega = 2.0 * kPi * 0.1;  // 0.1 Hz
+  constexpr double kOmega = 2.0 * std::numbers::pi * 0.1;  // 0.1 Hz
   constexpr double kDt = 1e-4;
-  constexpr double kSlack = kPi / 180.0;  // half of the 2° play
+  constexpr double kSlack = std::numbers::pi / 180.0;  // half of the 2° play
   constexpr double kStiffness = 0.63;
   // sin/cos of one tick's phase step and of 0.5 rad by their series (no libm).
   auto sin_series = [](double x) {

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <initializer_list>
+#include <numbers>
 
 #include "mjc/core/quantities.h"
 #include "mjc/core/trajectory.h"
@@ -22,9 +23,9 @@ namespace {
 using mjc::Angle;
 using mjc::AngularVelocity;
 using mjc::Frequency;
+using mjc::RampedSineConfig;
 using mjc::Segment;
 using mjc::SineConfig;
-using mjc::SweepConfig;
 using mjc::TrajectoryError;
 using mjc::TrajectoryGenerator;
 using mjc::TrajectoryMode;
@@ -32,7 +33,6 @@ using mjc::TrajectoryPoint;
 using mjc::vt::Rng;
 using namespace mjc::literals;
 
-constexpr double kPi = 3.14159265358979323846264338327950288;
 constexpr double kAngleLsb = 1.0 / 16777216.0;    // 2^-24 rad
 constexpr double kVelocityLsb = 1.0 / 1048576.0;  // 2^-20 rad/s
 constexpr Segment kQuarterSegment[4] = {
@@ -93,7 +93,7 @@ Trial TrialOf(const SineConfig& c) {
           tick};
 }
 
-Trial TrialOf(const SweepConfig& c) {
+Trial TrialOf(const RampedSineConfig& c) {
   const double tick = c.tick_rate_hz;
   return {c.neutral.ToDouble(),
           c.start_amplitude.ToDouble(),
@@ -169,13 +169,14 @@ TrialResult RunTrial(TrajectoryGenerator& generator, const Trial& trial,
   TrialResult result;
   const std::int64_t cycling = trial.cycle * trial.repetitions;
   const std::int64_t total = 2 * trial.rest + cycling + extra;
-  const double omega = 2.0 * kPi * trial.tick_rate_hz / static_cast<double>(trial.cycle);
+  const double omega =
+      2.0 * std::numbers::pi * trial.tick_rate_hz / static_cast<double>(trial.cycle);
   const double delta = trial.end_amplitude - trial.start_amplitude;
   const double slope = delta * trial.tick_rate_hz / static_cast<double>(cycling);
   // sin / cos of 2πi/N by rotation, restarted at every cycle: 4 products a tick instead
   // of two library calls (soft-float on the Cortex-M4), drift < 1e-11 over a cycle.
-  const double c1 = std::cos(2.0 * kPi / static_cast<double>(trial.cycle));
-  const double s1 = std::sin(2.0 * kPi / static_cast<double>(trial.cycle));
+  const double c1 = std::cos(2.0 * std::numbers::pi / static_cast<double>(trial.cycle));
+  const double s1 = std::sin(2.0 * std::numbers::pi / static_cast<double>(trial.cycle));
   double s = 0;
   double c = 1;
   Label previous{-1, Segment::kIdle, -1, false};
@@ -389,7 +390,7 @@ MJC_VECTOR_TEST(SineTrajectory, DoneHoldsNeutralUntilReplaced) {
 // Paper Fig. 7: the amplitude grows linearly over the cycles. Every sample against the
 // double reference, and the envelope at every peak and trough.
 MJC_VECTOR_TEST(SweepTrajectory, EnvelopeMatchesDoubleReference) {
-  SweepConfig config;
+  RampedSineConfig config;
   config.neutral = 0.1_rad;
   config.start_amplitude = 2.0_deg;
   config.end_amplitude = 30.0_deg;
@@ -434,21 +435,21 @@ MJC_VECTOR_TEST(SweepTrajectory, EnvelopeMatchesDoubleReference) {
   VT_EXPECT_LE(worst, 0.5);
   VT_EXPECT_TRUE(growing);
   // The last trough, 3.75 of 4 cycles in: 2° + 28°·0.9375 = 28.25°.
-  VT_EXPECT_NEAR(previous_peak, 28.25 * kPi / 180.0, 2 * kAngleLsb);
+  VT_EXPECT_NEAR(previous_peak, 28.25 * std::numbers::pi / 180.0, 2 * kAngleLsb);
 }
 
 MJC_VECTOR_TEST(SweepTrajectory, FromZeroAndDecreasing) {
-  SweepConfig rising;
+  RampedSineConfig rising;
   rising.neutral = -0.2_rad;
   rising.start_amplitude = Angle{};
   rising.end_amplitude = 10.0_deg;
   rising.frequency = 2.5_Hz;
   rising.repetitions = 3;
   rising.rest_ms = 10;
-  SweepConfig falling = rising;
+  RampedSineConfig falling = rising;
   falling.start_amplitude = 20.0_deg;
   falling.end_amplitude = 5.0_deg;
-  for (const SweepConfig& config : {rising, falling}) {
+  for (const RampedSineConfig& config : {rising, falling}) {
     TrajectoryGenerator generator;
     VT_EXPECT_EQ(Code(generator.StartSweep(config)), Code(TrajectoryError::kOk));
     VT_EXPECT_TRUE(generator.mode() == TrajectoryMode::kSweep);
@@ -648,7 +649,7 @@ MJC_VECTOR_TEST(TrajectoryConfig, RefusedConfigsKeepOldTrajectory) {
   VT_EXPECT_TRUE(generator.mode() == TrajectoryMode::kSine);
 
   // Sweep-only checks, against the same running trial.
-  SweepConfig sweep;
+  RampedSineConfig sweep;
   sweep.neutral = 0.0_rad;
   sweep.start_amplitude = -1.0_deg;
   sweep.end_amplitude = 20.0_deg;

@@ -6,6 +6,7 @@
 // good to ~1e-15, i.e. 1e-6 LSB, so it does not eat into the bound.
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 
 #include "mjc/core/quantities.h"
 #include "mjc/core/trig.h"
@@ -18,7 +19,7 @@ using mjc::vt::Rng;
 
 constexpr double kMaxErrorLsb = 1.0;
 constexpr int kRandomPhases = 100000;
-constexpr double kTwoPi = 6.283185307179586476925286766559;
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr std::uint32_t kQuarter = std::uint32_t{1} << 30;
 constexpr std::uint32_t kHalf = std::uint32_t{1} << 31;
 

@@ -3,6 +3,7 @@
 // derivative of a sinusoid at the window's centre (the estimator's exact group delay).
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 
 #include "mjc/core/velocity_estimator.h"
 #include "vector_test.h"
@@ -15,7 +16,6 @@ using mjc::VelocityEstimator;
 using mjc::VelocityEstimatorConfig;
 using mjc::VelocityEstimatorError;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kVelocityLsb = 1.0 / (1 << 20);
 
 std::int32_t g_storage[2001];
@@ -77,8 +77,8 @@ MJC_VECTOR_TEST(VelocityEstimator, GroupDelayIsHalfTheWindow) {
   VelocityEstimator est(g_storage);
   est.Configure({.window = static_cast<std::uint16_t>(n), .tick_hz = 10000});
   VT_EXPECT_EQ(est.delay_ticks(), 300);
-  const double amp = 0.3, w = 2 * kPi * 0.5;
-  const double x = kPi * 0.5 * n * 1e-4;
+  const double amp = 0.3, w = 2 * std::numbers::pi * 0.5;
+  const double x = std::numbers::pi * 0.5 * n * 1e-4;
   const double gain = 3 * (std::sin(x) - x * std::cos(x)) / (x * x * x);
   est.Reset(Angle::Quantize(0.0));
   double worst = 0;

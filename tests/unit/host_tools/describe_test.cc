@@ -1,5 +1,5 @@
-// Every code the protocol can carry has its own name: a fault or an outcome added to
-// the protocol without one fails here.
+// Every code the protocol can carry has its own name: a fault, an outcome or a parameter
+// status added to the protocol without one fails here.
 #include "mjc/host/describe.h"
 
 #include <gtest/gtest.h>
@@ -30,17 +30,32 @@ TEST(Describe, EveryFaultTheProtocolCarriesHasItsOwnName) {
   EXPECT_EQ(host::DescribeFault(static_cast<Fault>(999)), "999 (unknown fault)");
 }
 
-TEST(Describe, EveryCommandOutcomeHasItsOwnName) {
+// Every value of a one-byte code the protocol accepts has a name of its own, and every
+// other reads `unknown`; returns how many were named.
+template <class Code, class Name>
+std::size_t ExpectOwnNames(Name name, std::string_view unknown) {
   std::set<std::string_view> names;
   for (unsigned code = 0; code <= 0xFF; ++code) {
-    const auto outcome = static_cast<protocol::CommandOutcomeCode>(code);
-    if (!protocol::ValidEnumValue(outcome)) {
-      EXPECT_EQ(host::OutcomeName(outcome), "unknown outcome") << code;
+    const auto value = static_cast<Code>(code);
+    if (!protocol::ValidEnumValue(value)) {
+      EXPECT_EQ(name(value), unknown) << code;
       continue;
     }
-    EXPECT_NE(host::OutcomeName(outcome), "unknown outcome") << code;
-    EXPECT_TRUE(names.insert(host::OutcomeName(outcome)).second) << code;
+    EXPECT_NE(name(value), unknown) << code;
+    EXPECT_TRUE(names.insert(name(value)).second) << code;
   }
+  return names.size();
+}
+
+TEST(Describe, EveryCommandOutcomeHasItsOwnName) {
+  EXPECT_EQ(
+      ExpectOwnNames<protocol::CommandOutcomeCode>(host::OutcomeName, "unknown outcome"),
+      6u);
+}
+
+TEST(Describe, EveryParamStatusHasItsOwnName) {
+  EXPECT_EQ(
+      ExpectOwnNames<protocol::ParamStatus>(host::ParamStatusName, "unknown status"), 6u);
 }
 
 TEST(Describe, EveryCalibrationRefusalSaysWhichField) {

@@ -1,7 +1,7 @@
 // The report helpers (mjc/host/report.h) against values worked by hand: the summary
 // statistics (sample standard deviation), RMSE and range of small sets whose answers
 // are exact, the CSV table's text and number format, and the file and gnuplot failures
-// said with their reasons.
+// said with their reasons; which windows are the paper's analysed flexions.
 #include "mjc/host/report.h"
 
 #include <gtest/gtest.h>
@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "mjc/host/board_client.h"
 
 namespace mjc::host {
 namespace {
@@ -134,6 +136,46 @@ TEST(RunGnuplot, AFailingScriptSaysWhatGnuplotSaidAndKeepsItsLog) {
   EXPECT_NE(why.find("no_such_function_mjc"), std::string::npos) << why;
   EXPECT_TRUE(std::filesystem::exists(dir / "bad.gp.log"));
   std::filesystem::remove_all(dir);
+}
+
+std::vector<BoardWindow> Windows(int repetitions) {
+  std::vector<BoardWindow> w;
+  for (int r = 0; r < repetitions; ++r) {
+    for (const Motion m : {Motion::kFlexion, Motion::kExtension}) {
+      BoardWindow b;
+      b.motion = m;
+      b.repetition = static_cast<std::uint16_t>(r);
+      w.push_back(b);
+    }
+  }
+  return w;
+}
+
+std::vector<int> Repetitions(const std::vector<const BoardWindow*>& windows) {
+  std::vector<int> r;
+  for (const BoardWindow* w : windows) {
+    EXPECT_EQ(w->motion, Motion::kFlexion);
+    r.push_back(w->repetition);
+  }
+  return r;
+}
+
+TEST(AnalysedFlexions, TheMiddleThreeFlexions) {
+  // Repetitions count from 0: of 0..4 the middle three are 1, 2, 3; of 0..5 (even:
+  // one more after than before) 1, 2, 3; of 0..6, 2, 3, 4.
+  EXPECT_EQ(Repetitions(AnalysedFlexions(Windows(5), 5)), (std::vector<int>{1, 2, 3}));
+  EXPECT_EQ(Repetitions(AnalysedFlexions(Windows(6), 6)), (std::vector<int>{1, 2, 3}));
+  EXPECT_EQ(Repetitions(AnalysedFlexions(Windows(7), 7)), (std::vector<int>{2, 3, 4}));
+}
+
+TEST(AnalysedFlexions, AllOfThreeOrFewerAndNoneMissingInvented) {
+  EXPECT_EQ(Repetitions(AnalysedFlexions(Windows(3), 3)), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(Repetitions(AnalysedFlexions(Windows(2), 2)), (std::vector<int>{0, 1}));
+  // A window lost on the way: the analysis has what arrived, nothing made up.
+  std::vector<BoardWindow> w = Windows(5);
+  w.erase(w.begin() + 4);  // repetition 2's flexion
+  EXPECT_EQ(Repetitions(AnalysedFlexions(w, 5)), (std::vector<int>{1, 3}));
+  EXPECT_TRUE(AnalysedFlexions(std::vector<BoardWindow>{}, 5).empty());
 }
 
 }  // namespace

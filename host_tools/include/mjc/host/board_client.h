@@ -89,6 +89,28 @@ enum class WaitEnd : std::uint8_t {
   kAmbiguous = 5,    // two boards answer with this node id (BoardClient::ambiguous)
 };
 
+// Follows a motion a board was told to start (a trial or a stream: kRunning; a
+// calibration sweep: kCalibrating) through the states it reports, until it is over:
+// idle again once the motion's state was seen, or faulted. An idle board before that is
+// the board before the start took effect. The tools' waits over the bus and the
+// simulator's loops on the application share it.
+class MotionEnd {
+ public:
+  explicit constexpr MotionEnd(protocol::BoardState motion) : motion_(motion) {}
+  // The state the board reports now: true once the motion is over.
+  constexpr bool Over(protocol::BoardState state) {
+    if (state == motion_) started_ = true;
+    return state == protocol::BoardState::kFault ||
+           (started_ && state == protocol::BoardState::kIdle);
+  }
+  // The motion's state was seen.
+  constexpr bool started() const { return started_; }
+
+ private:
+  protocol::BoardState motion_;
+  bool started_ = false;
+};
+
 enum class HostHeartbeats : std::uint8_t {
   kOff = 0,   // the board is not supervised by this client
   kSend = 1,  // a HostHeartbeat every kHostHeartbeatPeriod while the client polls
@@ -173,6 +195,13 @@ class BoardClient {
   std::optional<std::int32_t> ReadParam(protocol::ParamId id, int timeout_ms,
                                         std::string* why);
 
+  // Writes a parameter's raw value and waits for the board's answer (timeout_ms as for
+  // Command; a control parameter is answered once the tick has applied or refused it):
+  // its status, and the value it holds now. nullopt when it cannot be sent or is not
+  // answered (then *why says which).
+  std::optional<protocol::ParamValue> WriteParam(protocol::ParamId id, std::int32_t raw,
+                                                 int timeout_ms, std::string* why);
+
   // Handles what arrives within timeout_ms: returns once something has, or at the
   // timeout, sending heartbeats meanwhile when they are on. False only when the link
   // failed (then *why says how); a quiet bus is not a failure.
@@ -184,6 +213,12 @@ class BoardClient {
   // arrived (windows, samples).
   bool Await(const std::function<bool()>& done, const Patience& patience, WaitEnd* end,
              std::string* why);
+
+  // Follows the motion this client just started (MotionEnd) with Await: true once it
+  // is over — status() then says idle or faulted. `each` (may be empty) is called on
+  // every pass first, to take what arrived (windows, samples) and show progress.
+  bool AwaitMotionEnd(protocol::BoardState motion, const std::function<void()>& each,
+                      const Patience& patience, WaitEnd* end, std::string* why);
 
   // Listens until the node has shown who it is: its clock has advanced a BoardInfo
   // period and a tenth (kBoardInfoPeriod; every board answering with this node id has
@@ -258,6 +293,12 @@ class BoardClient {
   bool Beat(std::string* why);
   // Calls the bus-off handler when the link counted new bus-off reports.
   void NoteBusOff();
+  // Sends `request` (a ParamRead or ParamWrite of `id`) and waits for the ParamValue of
+  // `id`; `what` names the request in the timeout's message ("a parameter read").
+  template <class Request>
+  std::optional<protocol::ParamValue> AskParam(const Request& request,
+                                               protocol::ParamId id, int timeout_ms,
+                                               const char* what, std::string* why);
 
   CanLink* link_;
   std::uint8_t node_;

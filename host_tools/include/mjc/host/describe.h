@@ -47,6 +47,10 @@ std::string SilentNode(int node, std::string_view iface);
 // Why the board refused a command ("the board is not idle"), or "accepted".
 std::string_view OutcomeName(protocol::CommandOutcomeCode outcome);
 
+// The board's answer to a parameter write: "ok", or why it refused it ("the board is
+// not idle (control parameters change only while it is)", "read-only", …).
+std::string_view ParamStatusName(protocol::ParamStatus status);
+
 // The board's answer to a calibration upload ("accepted", "bad CRC (corrupted in
 // transit)", "c_left above c_right", …); `detail` names the field out of range.
 std::string DescribeCalibrationResult(protocol::CalibrationResult result,

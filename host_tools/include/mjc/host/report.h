@@ -2,11 +2,14 @@
 // trial/report commands: summary statistics, RMSE, CSV tables, gnuplot figures.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "mjc/core/interface_energy.h"
 
 namespace mjc::host {
 
@@ -18,6 +21,29 @@ struct Stats {
 };
 
 Stats Describe(std::span<const double> values);
+
+// The repetitions the paper analyses of a trial of `repetitions`: the middle three.
+constexpr RepetitionRange AnalysedRepetitions(std::uint16_t repetitions) {
+  return MiddleRepetitions(repetitions, 3);
+}
+// A window the paper analyses: a flexion of an analysed repetition.
+constexpr bool IsAnalysedFlexion(Motion motion, std::uint16_t repetition,
+                                 std::uint16_t repetitions) {
+  return motion == Motion::kFlexion &&
+         AnalysedRepetitions(repetitions).Contains(repetition);
+}
+// The analysed flexions among a trial's windows, in their order: of the board's window
+// summaries as the host receives them, or of the simulator's windows against the
+// plant's truth (any Window with `motion` and `repetition`, counted from 0).
+template <class Window>
+std::vector<const Window*> AnalysedFlexions(const std::vector<Window>& windows,
+                                            std::uint16_t repetitions) {
+  std::vector<const Window*> out;
+  for (const Window& w : windows) {
+    if (IsAnalysedFlexion(w.motion, w.repetition, repetitions)) out.push_back(&w);
+  }
+  return out;
+}
 
 // √(mean((a − b)²)); the spans must be the same non-zero length.
 double Rmse(std::span<const double> a, std::span<const double> b);

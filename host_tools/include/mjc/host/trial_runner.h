@@ -40,8 +40,4 @@ std::chrono::milliseconds TrialBoardTime(const protocol::TrialConfig& config);
 BoardTrial RunBoardTrial(BoardClient& board, const protocol::TrialConfig& config,
                          const std::function<void(const BoardWindow&)>& progress);
 
-// The paper's analysed flexions: the middle three of `repetitions`.
-std::vector<BoardWindow> MiddleFlexions(const std::vector<BoardWindow>& windows,
-                                        std::uint16_t repetitions);
-
 }  // namespace mjc::host

@@ -60,8 +60,8 @@ struct CanNodeCounters {
   std::uint32_t stream_timeouts = 0;
   std::uint32_t host_timeouts = 0;
   std::uint32_t bus_off = 0;  // bus-off events the driver reported (each one stops us)
-  std::uint32_t emergency_stops = 0;     // StopAll frames taken (each one stops us)
   std::uint32_t boot_holds_refused = 0;  // BootHolds answered kMotionRunning
+  std::uint32_t emergency_stops = 0;     // StopAll frames taken (each one stops us)
   std::uint32_t isotp_errors = 0;  // transfers dropped (sequence, timeout, overflow)
   std::uint32_t calibrations_accepted = 0;
   std::uint32_t calibrations_refused = 0;

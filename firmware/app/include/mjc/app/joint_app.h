@@ -72,7 +72,7 @@ class JointApp {
   // the CalibrationError.
   CommandOutcome SetCalibration(const Calibration& calibration, RequestTag tag = 0);
   CommandOutcome StartTrial(const SineConfig& sine, RequestTag tag = 0);
-  CommandOutcome StartCalibrationSweep(const SweepConfig& sweep, RequestTag tag = 0);
+  CommandOutcome StartCalibrationSweep(const RampedSineConfig& sweep, RequestTag tag = 0);
   // Streamed setpoints: the setpoint moves toward the latest target at most max_rate
   // (rad/s), starting from the present setpoint. Needs a calibrated, idle board.
   CommandOutcome StartStream(AngularVelocity max_rate, RequestTag tag = 0);
@@ -125,7 +125,7 @@ class JointApp {
   // --- interrupt context -----------------------------------------------------------
   template <hal::JointIo Io>
   void ISR_Tick(Io& io) {
-    ISR_ApplyCommand();
+    ISR_ApplyRequest();
     const Sample sample = io.ISR_Read();
     ISR_FollowHost();
     control_.ISR_Step(sample, &result_);
@@ -137,7 +137,7 @@ class JointApp {
   }
 
  private:
-  enum class CommandKind : std::uint8_t {
+  enum class RequestKind : std::uint8_t {
     kConfigure,
     kSetCalibration,
     kStartTrial,
@@ -146,24 +146,26 @@ class JointApp {
     kStop,
     kClearFaults,
   };
-  struct Command {
-    CommandKind kind = CommandKind::kStop;
+  // A submitted command on its way to the tick (the mailbox, requests_), with the
+  // submitter's tag its verdict returns with.
+  struct Request {
+    RequestKind kind = RequestKind::kStop;
     RequestTag tag = 0;
     ControlConfig config;  // kConfigure
     Calibration calibration;
     SineConfig sine;
-    SweepConfig sweep;
+    RampedSineConfig sweep;
     AngularVelocity stream_rate;
   };
 
-  CommandOutcome Submit(const Command& command);
+  CommandOutcome Submit(const Request& request);
   // The checks every start shares: idle, and calibrated unless it is the sweep. The
   // main loop's (on the last tick's snapshot) and the tick's (on its own state).
   static CommandOutcome CheckStart(bool needs_calibration, BoardState state,
                                    bool calibrated);
   CommandOutcome CheckStart(bool needs_calibration) const;
-  void ISR_ApplyCommand();
-  CommandOutcome ISR_Apply(const Command& c);
+  void ISR_ApplyRequest();
+  CommandOutcome ISR_Apply(const Request& c);
   void ISR_FollowHost();
   void ISR_AfterStep();
   void ISR_Enter(BoardState next);
@@ -173,7 +175,7 @@ class JointApp {
   TickResult result_;
   BoardState state_ = BoardState::kIdle;
   bool calibrated_ = false;
-  SpscQueue<Command, 4> commands_;
+  SpscQueue<Request, 4> requests_;
   SpscQueue<AppEvent, 64> events_;
   std::atomic<std::int32_t> stream_target_{0};
   std::atomic<std::uint16_t> raised_fault_{0};  // a Fault code, 0 = none

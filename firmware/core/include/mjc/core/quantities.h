@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <numbers>
 
 #include "mjc/core/fixed.h"
 
@@ -45,7 +46,7 @@ consteval Angle operator""_rad(long double v) {
   return Angle::FromDouble(static_cast<double>(v));
 }
 consteval Angle operator""_deg(long double v) {
-  return Angle::FromDouble(static_cast<double>(v) * (3.14159265358979323846 / 180.0));
+  return Angle::FromDouble(static_cast<double>(v) * (std::numbers::pi / 180.0));
 }
 consteval AngularVelocity operator""_rad_s(long double v) {
   return AngularVelocity::FromDouble(static_cast<double>(v));

@@ -32,6 +32,7 @@
 #pragma once
 
 #include <cstdint>
+#include <numbers>
 
 #include "mjc/core/quantities.h"
 
@@ -97,8 +98,7 @@ inline constexpr std::uint32_t kMaxTickRateHz = 65535;
 // Half a turn. Finger joints move less than 100° and with α = r_m/r_j ≈ 1 the motor
 // pulley moves alike (the paper's largest amplitude is 25° = 0.44 rad); anything larger
 // is most likely degrees sent as radians, and "25 rad" would wind the cable 4 turns.
-inline constexpr Angle kMaxTrajectoryAmplitude =
-    Angle::FromDouble(3.14159265358979323846);
+inline constexpr Angle kMaxTrajectoryAmplitude = Angle::FromDouble(std::numbers::pi);
 // A minute: the paper rests 3 s between amplitude trials.
 inline constexpr std::uint32_t kMaxRestMs = 60000;
 
@@ -122,12 +122,13 @@ struct SineConfig {
   std::uint32_t tick_rate_hz = kDefaultTickRateHz;
 };
 
-// The calibration sweep (paper Fig. 7): like SineConfig, but the amplitude ramps
+// A sine whose amplitude ramps: the calibration sweep (paper Fig. 7), which the wire's
+// protocol::SweepConfig asks for. Like SineConfig, but the amplitude ramps
 // linearly in time from start_amplitude at the first cycle tick to end_amplitude at the
 // end of the last cycle (one rounding per tick, no accumulated error). Segments,
 // repetition and done are as for the sine. Velocity is the exact derivative,
 // A(t)·2πf·cos + (dA/dt)·sin.
-struct SweepConfig {
+struct RampedSineConfig {
   Angle neutral;                  // rad; neutral ± max amplitude inside Angle's range
   Angle start_amplitude;          // rad, [0, kMaxTrajectoryAmplitude]
   Angle end_amplitude;            // rad, (0, kMaxTrajectoryAmplitude]; may be below start
@@ -140,7 +141,7 @@ struct SweepConfig {
 // kOk, or the first failing check in this order: tick rate, amplitude(s), frequency,
 // repetitions, rest, setpoint range, velocity range.
 [[nodiscard]] TrajectoryError Validate(const SineConfig& config);
-[[nodiscard]] TrajectoryError Validate(const SweepConfig& config);
+[[nodiscard]] TrajectoryError Validate(const RampedSineConfig& config);
 // The checks StartStream applies to its max_rate at tick_rate_hz: kOk,
 // kTickRateOutOfRange, kRateNotPositive or kRateBelowResolution.
 [[nodiscard]] TrajectoryError ValidateStreamRate(AngularVelocity max_rate,
@@ -187,7 +188,7 @@ class TrajectoryGenerator {
   // target of neutral). On any error nothing changes and the old trajectory continues.
   [[nodiscard]] TrajectoryError StartSine(const SineConfig& config);
   // The calibration sweep, with the same contract as StartSine.
-  [[nodiscard]] TrajectoryError StartSweep(const SweepConfig& config);
+  [[nodiscard]] TrajectoryError StartSweep(const RampedSineConfig& config);
   // Constant setpoint `position` (rad, any value), velocity 0, segment kHold, until
   // replaced.
   void Hold(Angle position);

@@ -6,6 +6,10 @@
 //
 // Values travel as raw integers: a fixed-point field's raw value (value = raw / 2^frac),
 // an integer field as itself.
+//
+// The protocol's version (kVersion) says what the list and the messages mean. The board
+// reports it as a parameter (protocol_version); the host tools refuse a board of
+// another version, and `mjc param restore` a file dumped under another one.
 #pragma once
 
 #include <cstdint>
@@ -15,6 +19,13 @@
 #include "mjc/core/quantities.h"
 
 namespace mjc::protocol {
+
+// The version of the messages and the parameter list: raised when a message's layout,
+// or a parameter's id, key, unit, format or range, changes its meaning, so that a board,
+// a tool and a parameter file of different versions refuse each other instead of
+// misreading raw values. Adding a message or a parameter keeps it. The DBC's VERSION
+// line carries it.
+inline constexpr std::uint16_t kVersion = 1;
 
 // The board's clock as the Heartbeat's `tick` counts it: control ticks at the board's
 // 10 kHz (ControlConfig's default; the app checks the two agree). The host measures the
@@ -81,8 +92,8 @@ inline constexpr std::int64_t kI32Min = std::numeric_limits<std::int32_t>::min()
     "position loop: duty per rad/s of motor velocity")                                   \
   X(kPositionKff, 0x0203, "position_kff", "s/rad", 16, 0, param_detail::kI32Max,         \
     kControl, "position loop: duty per rad/s of setpoint velocity")                      \
-  X(kVelocityWindow, 0x0210, "velocity_window", "ticks", 0, 1,                           \
-    ControlTick::kMaxVelocityWindow, kControl,                                           \
+  X(kVelocityWindow, 0x0210, "velocity_window", "ticks", 0,                              \
+    VelocityEstimator::kMinWindow, ControlTick::kMaxVelocityWindow, kControl,            \
     "joint velocity estimator's window (odd; its delay aligns the torque)")              \
   X(kTorqueMax, 0x0300, "torque_max", "N.m", Torque::kFracBits, 1,                       \
     param_detail::kI32Max, kControl, "SEA torque limit (fault 202 beyond it)")           \
@@ -100,7 +111,9 @@ inline constexpr std::int64_t kI32Min = std::numeric_limits<std::int32_t>::min()
   X(kCalibrated, 0x0405, "calibrated", "", 0, 0, 1, kReadOnly,                           \
     "1 once a calibration was accepted")                                                 \
   X(kBuildId, 0x0500, "build_id", "", 0, param_detail::kI32Min, param_detail::kI32Max,   \
-    kReadOnly, "the running image's commit (BoardInfo::build, as a signed value)")
+    kReadOnly, "the running image's commit (BoardInfo::build, as a signed value)")       \
+  X(kProtocolVersion, 0x0501, "protocol_version", "", 0, 1, 0xFFFF, kReadOnly,           \
+    "the protocol the running image speaks (kVersion)")
 
 // Parameters readable and writable over the bus. Stable numbers: never renumbered.
 enum class ParamId : std::uint16_t {
@@ -137,5 +150,42 @@ constexpr const ParamInfo* FindParam(ParamId id) {
 
 // What the decoder accepts on the wire.
 constexpr bool ValidEnumValue(ParamId id) { return FindParam(id) != nullptr; }
+
+// A digest of what the list means (ids, keys, units, formats, ranges, access; not the
+// descriptions): FNV-1a over each entry's fields.
+consteval std::uint32_t ParamListDigest() {
+  std::uint32_t h = 2166136261u;
+  const auto byte = [&h](std::uint8_t b) { h = (h ^ b) * 16777619u; };
+  const auto integer = [&byte](std::int64_t v) {
+    for (int i = 0; i < 8; ++i)
+      byte(static_cast<std::uint8_t>(static_cast<std::uint64_t>(v) >> (8 * i)));
+  };
+  const auto text = [&byte](const char* s) {
+    for (; *s != '\0'; ++s) byte(static_cast<std::uint8_t>(*s));
+    byte(0);
+  };
+  for (const ParamInfo& p : kParams) {
+    integer(static_cast<std::uint16_t>(p.id));
+    text(p.key);
+    text(p.unit);
+    integer(p.frac_bits);
+    integer(p.min_raw);
+    integer(p.max_raw);
+    integer(static_cast<std::uint8_t>(p.access));
+  }
+  return h;
+}
+// The list as kVersion knows it. A change to the list fails here: when it changes what
+// an existing parameter means (its id, key, unit, format or range), raise kVersion;
+// then write the new digest here (the compiler's message names it: "ParamListIs()
+// [with ... kDigest = N]").
+inline constexpr std::uint32_t kParamListDigest = 1630587717;
+template <std::uint32_t kDigest>
+constexpr bool ParamListIs() {
+  static_assert(kDigest == kParamListDigest,
+                "protocol/params.h: the parameter list changed; see kParamListDigest");
+  return true;
+}
+static_assert(ParamListIs<ParamListDigest()>());
 
 }  // namespace mjc::protocol

@@ -39,7 +39,7 @@ struct CalibrationOutcome {
 // Runs the increasing-amplitude sweep on the robot alone (the plant must have no
 // interface), fits c_r, c_l with NLopt on the board's own θ_m, θ_j, uploads the
 // calibration and waits for the board to accept it.
-CalibrationOutcome RunCalibration(SimBoard& board, const SweepConfig& sweep);
+CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep);
 
 struct WindowOutcome {
   Motion motion = Motion::kFlexion;
@@ -72,10 +72,6 @@ inline constexpr int kProfilePoints = 100;
 
 // One sine trial to completion on a calibrated, idle board.
 TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace);
-
-// The flexion windows of the paper's analysed repetitions (the middle three of five).
-std::vector<const WindowOutcome*> AnalysedFlexions(const TrialOutcome& trial,
-                                                   std::uint16_t repetitions);
 
 SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions = 5);
 
