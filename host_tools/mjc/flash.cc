@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "mjc/gpio/reset_line.h"
 #include "mjc/host/bus_scan.h"
 #include "mjc/host/describe.h"
 #include "mjc/host/firmware_update.h"
@@ -97,10 +98,15 @@ void AddFlash(CLI::App& app) {
       "refuses while a trial or calibration runs), takes the image in chunks, checks its "
       "CRC in flash, starts it and must report its build. Its node id and calibration "
       "are never touched. A board that fails is named and stays in its bootloader, "
-      "which waits for an image: run mjc flash again (exit 8).");
-  static std::string iface, image_path;
+      "which waits for an image: run mjc flash again (exit 8).\n\n"
+      "--reset-line (one board) or --reset (each board's line from the config file's "
+      "reset_lines) pulses the board's NRST right after the first BootHold: the board "
+      "restarts whatever its application does (a hanging one, an image that does not "
+      "know BootHold) and the holds catch its bootloader in its 200 ms hold window. A "
+      "board heard running a motion is refused all the same.");
+  static std::string iface, image_path, reset_name;
   static std::vector<int> nodes;
-  static bool all = false, info = false, json = false;
+  static bool all = false, info = false, json = false, reset = false;
   AddIfaceOption(cmd, &iface);
   auto* node_option =
       cmd->add_option("--node", nodes, "A board to update (repeat for several)")
@@ -113,6 +119,15 @@ void AddFlash(CLI::App& app) {
                 "table)");
   cmd->add_flag("--json", json, "With --info: one JSON object per node and line");
   cmd->add_option("IMAGE", image_path, "The packed image file (maestro-jc-g474-app.bin)");
+  auto* reset_line_option =
+      cmd->add_option("--reset-line", reset_name,
+                      "The board's NRST, CHIP:LINE: pulsed after the first BootHold, so "
+                      "the holds catch the board in its bootloader (one --node)")
+          ->check(LineSpecCheck(false));
+  cmd->add_flag("--reset", reset,
+                "Pulse each board's NRST after its first BootHold, its line from the "
+                "config file's \"reset_lines\"")
+      ->excludes(reset_line_option);
   cmd->callback([] {
     if (info) {
       if (!image_path.empty() || !nodes.empty() || all) {
@@ -135,6 +150,12 @@ void AddFlash(CLI::App& app) {
       throw Failure(Exit::kUsage,
                     "say which boards: --node N (repeat for several) or --all (see mjc "
                     "flash --help)");
+    }
+    if (!reset_name.empty() && (all || nodes.size() != 1)) {
+      throw Failure(Exit::kUsage,
+                    "--reset-line is one board's NRST: give one --node (for several, "
+                    "--reset takes each board's line from the config file's "
+                    "\"reset_lines\")");
     }
     // The file first: nothing goes on the bus for a file that does not check out.
     std::string why;
@@ -161,6 +182,27 @@ void AddFlash(CLI::App& app) {
                                            " ms: are the boards powered?)");
       }
     }
+    // The reset lines, each held from now on (a missing or busy one refused before
+    // anything is sent).
+    std::map<int, std::unique_ptr<gpio::OutputLine>> reset_lines;
+    for (const int node : targets) {
+      std::optional<gpio::LineSpec> spec = LineOf(reset_name);
+      if (reset) {
+        const auto& lines = Defaults().reset_lines;
+        if (!lines.contains(node)) {
+          throw Failure(Exit::kUsage,
+                        "--reset: the config file has no reset line for "
+                        "node " +
+                            std::to_string(node) + " (\"reset_lines\": {\"" +
+                            std::to_string(node) + "\": \"CHIP:LINE\"})");
+        }
+        spec = lines.at(node);
+      }
+      if (!spec) continue;
+      reset_lines[node] = gpio::OpenResetLine(*spec, "mjc flash", &why);
+      if (!reset_lines[node])
+        throw Failure("reset line of node " + std::to_string(node) + ": " + why);
+    }
     std::fprintf(stderr, "mjc flash: %s: %s, %s, CRC-32 0x%08" PRIX32 "\n",
                  image->name.c_str(), image->BuildText().c_str(),
                  Kilobytes(image->header.length).c_str(), image->header.image_crc);
@@ -173,6 +215,21 @@ void AddFlash(CLI::App& app) {
       if (scanned != scan.nodes().end() && scanned->second.identity.ambiguous()) {
         outcome[node] = Exit::kAmbiguous;
         messages[node] = scanned->second.identity.Message(node) + "; nothing was done";
+        if (targets.size() > 1)
+          std::fprintf(stderr, "mjc flash: %s\n", messages[node].c_str());
+        continue;
+      }
+      // A reset would stop a motion as surely as a BootHold is refused during one.
+      const auto nrst = reset_lines.find(node);
+      if (nrst != reset_lines.end() && scanned != scan.nodes().end() &&
+          scanned->second.heartbeat &&
+          (scanned->second.heartbeat->state == protocol::BoardState::kRunning ||
+           scanned->second.heartbeat->state == protocol::BoardState::kCalibrating)) {
+        outcome[node] = Exit::kRefused;
+        messages[node] = "node " + std::to_string(node) +
+                         " is running a motion: stop it first (mjc stop --node " +
+                         std::to_string(node) +
+                         "); nothing was done (its reset line would stop it mid-motion)";
         if (targets.size() > 1)
           std::fprintf(stderr, "mjc flash: %s\n", messages[node].c_str());
         continue;
@@ -194,9 +251,23 @@ void AddFlash(CLI::App& app) {
         EndProgress();
         std::fprintf(stderr, "mjc flash: %s\n", hint.c_str());
       };
-      // A reset line's pulse would go in options.after_first_hold (host_tools/gpio):
-      // the holds are then on the bus before the board restarts, and catch its
-      // bootloader in the hold window whatever the application does.
+      // The reset line's pulse once the first hold is on the bus: the holds that follow
+      // catch the restarted board's bootloader in its hold window, whatever the
+      // application does. A pulse that fails leaves the holds to do what they can.
+      if (nrst != reset_lines.end()) {
+        options.after_first_hold = [node, line = nrst->second.get()] {
+          std::string failed;
+          EndProgress();
+          if (gpio::PulseReset(*line, &failed)) {
+            std::fprintf(stderr, "mjc flash: node %d: %s pulsed low %lld ms\n", node,
+                         line->name().c_str(),
+                         static_cast<long long>(gpio::kResetPulse.count()));
+          } else {
+            std::fprintf(stderr, "mjc flash: node %d: no reset: %s\n", node,
+                         failed.c_str());
+          }
+        };
+      }
       host::FirmwareUpdate update(link.get(), transport.get(),
                                   static_cast<std::uint8_t>(node), *image, options);
       const host::UpdateResult r = update.Run();

@@ -9,7 +9,8 @@
 // build installed (a stand-in: the host cannot run the ARM image, so the board runs the
 // host build of the application and reports the build in the installed image's header,
 // sim::BootingBoard) and its node id commissioned. Killing the process is a power cut;
-// starting it again on the same file is the power-up.
+// starting it again on the same file is the power-up. --reset-line gives it an NRST on
+// a GPIO line: held low, the board stays in reset; released, it starts anew.
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -138,7 +139,7 @@ void AddSim(CLI::App& app) {
       "Signals: SIGUSR1 makes the joint encoder flag an error (fault 101) until "
       "SIGUSR2. "
       "A bus-off error frame on the interface is taken as the board's own bus-off.");
-  static std::string iface, robot = "default", subject, flash_path;
+  static std::string iface, robot = "default", subject, flash_path, reset_name;
   static int node = 1;
   static double seconds = 0, speed = 1;
   AddIfaceOption(cmd, &iface);
@@ -165,9 +166,23 @@ void AddSim(CLI::App& app) {
                   "frames)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_option("--reset-line", reset_name,
+                  "The board's NRST: a GPIO input CHIP:LINE, active low (a host's reset "
+                  "line wired to it: held low, the board stays in reset; released, it "
+                  "starts anew, reset cause pin)")
+      ->check(LineSpecCheck(false));
   cmd->callback([] {
     std::string why;
     auto link = OpenLink(iface);
+    // The NRST pin, watched for the edge into its active (low) level.
+    std::unique_ptr<gpio::EdgeInput> nrst;
+    if (const auto spec = LineOf(reset_name)) {
+      gpio::LineOptions options;
+      options.consumer = "mjc sim nrst";
+      options.active_low = true;
+      nrst = gpio::OpenEdgeInput(*spec, options, &why);
+      if (!nrst) throw Failure("reset line: " + why);
+    }
     auto load = [](const std::string& s) {
       return s.find('/') != std::string::npos || s.ends_with(".json")
                  ? plant::LoadPlantParamsFile(s)
@@ -289,6 +304,21 @@ void AddSim(CLI::App& app) {
       // more than the plant (41 % of a QEMU TCG vCPU for a board at speed 1, half of
       // it in the kernel). A frame waits at most 1 ms.
       if (ticks % kPollEveryTicks == 0) {
+        // NRST pulled low since the last pass (an edge event, so a pulse shorter than a
+        // pass is not missed): the board is held in reset until it is released, then
+        // starts anew; the pacing starts anew after it.
+        std::string nrst_why;
+        if (nrst && nrst->WaitActive(std::chrono::milliseconds(0), &nrst_why) ==
+                        gpio::WaitResult::kEdge) {
+          for (int level; (level = nrst->Active(&nrst_why)) != 0;) {
+            if (level < 0 || stop) break;
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
+          }
+          board.PinReset();
+          origin = Clock::now();
+          origin_tick = ticks;
+        }
+        if (!nrst_why.empty()) throw Failure("reset line: " + nrst_why);
         board.Poll();
         if (port.failed()) throw Failure(port.error());
         if (board.in_application() != in_application) {

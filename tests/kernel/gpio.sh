@@ -16,12 +16,18 @@
 #   - mjc trial --sync-line: a rising edge at each flexion window's start and a falling
 #     one at each extension's (counted by the chip against windows.csv), low at the end;
 #   - mjc reset: the NRST line pulled low for at least 10 ms (the chip's own clock) and
-#     released, by --line and from the config file's reset_lines; refused while held.
+#     released, by --line and from the config file's reset_lines; refused while held;
+#   - mjc flash --reset-line: a board that hangs (its mjc sim stopped with SIGSTOP,
+#     resumed once the pulse is over: the real chip would be reset at once) restarts on
+#     its NRST (mjc sim --reset-line, an input of the test chip wired to the host's
+#     output) and the BootHolds catch its bootloader: updated; a board in a motion is
+#     refused and its NRST left alone.
 # Prints estop_to_stop_frame_ms (estop_latency).
-# usage: gpio.sh <path of mjc> <path of estop_latency>
+# usage: gpio.sh <path of mjc> <path of estop_latency> <path of mjc-image>
 set -u
 mjc=$1
 latency=$2
+packer=$3
 work=$(mktemp -d)
 . "$(dirname "$0")/checks.sh"
 . "$(dirname "$0")/receivers.sh"
@@ -246,6 +252,55 @@ kill "$holder_pid"
 wait "$holder_pid" 2>/dev/null
 unset MJC_CONFIG
 
+# --- mjc flash --reset-line ---------------------------------------------------------
+# Board 3's NRST pin is line 7, wired to the host's nrst2 output (line 3); its pull-up
+# keeps it high.
+new=5eed1234
+{
+  printf '\x00\x80\x01\x20\x01\x44\x00\x08'
+  yes "maestro-jc test image $new" | head -c $((8192 - 8))
+} >"$work/app.raw"
+check "an image packs" "$packer" pack "$work/app.raw" "$work/new.bin" --hardware 1 1 \
+  --load-address 0x08004200 --commit $new --dirty 0 --commit-time 1795486377 \
+  --describe "test-$new" --board-type 1
+set_input 3 1
+echo 3 >"$dbg/7/follow"
+"$mjc" sim --iface vcan0 --node 3 --reset-line "$chip:spare7" 2>"$work/sim3.err" &
+sim3=$!
+check "board 3 comes up, its NRST on a GPIO line" wait_for "$work/sim3.err" "mjc sim: node 3 on vcan0"
+check "  holding it" wait_holder 7 '"mjc'
+kill -STOP "$sim3"  # it hangs: no frame, no answer
+falling3=$(read_dbg 3 falling)
+"$mjc" flash --iface vcan0 --node 3 --reset-line "$chip:nrst2" "$work/new.bin" \
+  >"$work/flash.out" 2>"$work/flash.err" &
+flash=$!
+check "mjc flash pulses its reset line after the first hold" wait_for "$work/flash.err" "mjc flash: node 3: $chip:nrst2 pulsed low 10 ms"
+kill -CONT "$sim3"
+wait "$flash"
+status=$?
+check "the hanging board is updated ($status)" test "$status" -eq 0
+check "  saying so" grep -q "^node 3: updated to $new" "$work/flash.out"
+check "  it restarted on its pin" grep -q "mjc sim: reset (reset pin)" "$work/sim3.err"
+check "  and its bootloader was held by the host" grep -q "node 3: bootloader stays: ready (held by a host)" "$work/sim3.err"
+check "  (its application never took a hold)" sh -c "! grep -q 'entering the bootloader' '$work/sim3.err'"
+check "  one pulse on the wire" test "$(read_dbg 3 falling)" -eq $((falling3 + 1))
+kill -INT "$sim3"
+wait "$sim3"
+# A board in a motion is not reset under a person's hand.
+"$mjc" trial --iface vcan0 --node 1 --estop-line none --protocol amplitude --amplitudes 15 \
+  --reps 20 --frequency-hz 0.5 --rest-s 0.2 --out "$work/t4" >"$work/t4.out" 2>"$work/t4.err" &
+trial=$!
+check "a trial runs on node 1" wait_for "$work/t4.err" "repetition 1/20"
+falling2=$(read_dbg 2 falling)
+"$mjc" flash --iface vcan0 --node 1 --reset-line "$chip:nrst1" "$work/new.bin" \
+  >/dev/null 2>"$work/flash1.err"
+status=$?
+check "mjc flash --reset-line refuses a board in a motion: exit 4 ($status)" test "$status" -eq 4
+check "  saying why" grep -q "node 1 is running a motion: stop it first (mjc stop --node 1); nothing was done (its reset line would stop it mid-motion)" "$work/flash1.err"
+check "  and its NRST was not touched" test "$(read_dbg 2 falling)" -eq "$falling2"
+"$mjc" stop --iface vcan0 --node 1 >/dev/null 2>&1
+wait "$trial"
+
 # --- the figure -----------------------------------------------------------------------
 "$mjc" estop --iface vcan0 --line "$chip:spare5" >"$work/bench.out" 2>&1 &
 estop=$!
@@ -261,4 +316,4 @@ wait "$sim1" "$sim2"
 kill "$dumper" 2>/dev/null
 wait "$dumper" 2>/dev/null
 finish "$work/estop.out" "$work/estop.err" "$work/t1.err" "$work/t2.err" "$work/t3.err" \
-  "$work/t3.out" "$work/bus.log" "$work/latency.out"
+  "$work/t3.out" "$work/flash.err" "$work/sim3.err" "$work/bus.log" "$work/latency.out"

@@ -21,8 +21,11 @@
  *   falling      r   falling edges
  *   last_low_ns  r   how long the wire last stayed low, from a falling to the next
  *                    rising edge (ktime, ns); 0 before the first such pulse
+ *   follow       rw  -1, or the offset of another line whose wire this line's input
+ *                    is connected to: a host's output seen by a board's input (an
+ *                    NRST line driven by mjc and watched by a simulated board)
  * Writing "input" changes the level synchronously: its edge event is queued before
- * write() returns.
+ * write() returns; so does a followed line's change for its followers.
  */
 #include <linux/bitmap.h>
 #include <linux/debugfs.h>
@@ -53,6 +56,7 @@ struct mjc_line {
 	u32 rising;
 	u32 falling;
 	u64 last_low_ns;
+	s32 follow;  /* the line whose wire drives this one's input, -1: none */
 	struct mjc_test_gpio *chip;
 	unsigned int offset;
 };
@@ -101,15 +105,28 @@ static bool mjc_update_locked(struct mjc_test_gpio *chip, unsigned int offset)
 static void mjc_change(struct mjc_test_gpio *chip, unsigned int offset,
 		       void (*apply)(struct mjc_line *l, int value), int value)
 {
+	DECLARE_BITMAP(fire, MJC_NGPIO);
 	unsigned long flags;
-	bool fire;
+	unsigned int i;
 
+	bitmap_zero(fire, MJC_NGPIO);
 	spin_lock_irqsave(&chip->lock, flags);
 	apply(&chip->lines[offset], value);
-	fire = mjc_update_locked(chip, offset);
+	if (mjc_update_locked(chip, offset))
+		__set_bit(offset, fire);
+	/* The lines wired to this one see its wire (one hop: no chains, no loops). */
+	for (i = 0; i < MJC_NGPIO; i++) {
+		struct mjc_line *f = &chip->lines[i];
+
+		if (i == offset || f->follow != (s32)offset)
+			continue;
+		f->input = chip->lines[offset].level;
+		if (mjc_update_locked(chip, i))
+			__set_bit(i, fire);
+	}
 	spin_unlock_irqrestore(&chip->lock, flags);
-	if (fire)
-		generic_handle_domain_irq_safe(chip->gc.irq.domain, offset);
+	for_each_set_bit(i, fire, MJC_NGPIO)
+		generic_handle_domain_irq_safe(chip->gc.irq.domain, i);
 }
 
 static void mjc_apply_input(struct mjc_line *l, int value) { l->input = value; }
@@ -246,6 +263,47 @@ static const struct file_operations mjc_level_fops = {
 	.llseek = default_llseek,
 };
 
+/* debugfs "follow": -1, or the line whose wire this line's input follows. */
+static ssize_t mjc_follow_write(struct file *file, const char __user *buf, size_t count,
+				loff_t *ppos)
+{
+	struct mjc_line *l = file->private_data;
+	unsigned long flags;
+	int follow;
+	int ret = kstrtoint_from_user(buf, count, 10, &follow);
+
+	if (ret)
+		return ret;
+	if (follow < -1 || follow >= MJC_NGPIO || follow == (int)l->offset)
+		return -EINVAL;
+	spin_lock_irqsave(&l->chip->lock, flags);
+	l->follow = follow;
+	spin_unlock_irqrestore(&l->chip->lock, flags);
+	/* From now on its input is that wire's level. */
+	if (follow >= 0)
+		mjc_change(l->chip, l->offset, mjc_apply_input,
+			   mjc_get(&l->chip->gc, follow));
+	return count;
+}
+
+static ssize_t mjc_follow_read(struct file *file, char __user *buf, size_t count,
+			       loff_t *ppos)
+{
+	struct mjc_line *l = file->private_data;
+	char text[8];
+	int n = scnprintf(text, sizeof(text), "%d\n", l->follow);
+
+	return simple_read_from_buffer(buf, count, ppos, text, n);
+}
+
+static const struct file_operations mjc_follow_fops = {
+	.owner = THIS_MODULE,
+	.open = simple_open,
+	.read = mjc_follow_read,
+	.write = mjc_follow_write,
+	.llseek = default_llseek,
+};
+
 static void mjc_debugfs_init(struct mjc_test_gpio *chip)
 {
 	unsigned int i;
@@ -263,6 +321,7 @@ static void mjc_debugfs_init(struct mjc_test_gpio *chip)
 		debugfs_create_u32("rising", 0400, dir, &l->rising);
 		debugfs_create_u32("falling", 0400, dir, &l->falling);
 		debugfs_create_u64("last_low_ns", 0400, dir, &l->last_low_ns);
+		debugfs_create_file("follow", 0600, dir, l, &mjc_follow_fops);
 	}
 }
 
@@ -280,6 +339,7 @@ static int __init mjc_test_gpio_init(void)
 	for (i = 0; i < MJC_NGPIO; i++) {
 		chip->lines[i].chip = chip;
 		chip->lines[i].offset = i;
+		chip->lines[i].follow = -1;
 	}
 
 	mjc_pdev = platform_device_register_simple("mjc-test-gpio", PLATFORM_DEVID_NONE,

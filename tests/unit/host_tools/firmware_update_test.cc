@@ -1,7 +1,8 @@
 // mjc flash's update (host::FirmwareUpdate) against a simulated board — its real
 // bootloader logic, then its application — on an in-process bus in the board's time
 // (flash_rig.h): a running board caught, updated and started with the new build, its
-// node id and calibration untouched; a board in a motion refused; a power cut in the
+// node id and calibration untouched; a board in a motion refused; a hanging board
+// caught by its reset line's pulse; a power cut in the
 // middle, the board's bootloader waiting, a second update recovering it; lost frames and
 // answers sent again; an image for other hardware refused with the old image started
 // again; a silent node. And the image checks that keep a bad file off the bus.
@@ -21,6 +22,7 @@
 #include "mjc/app/calibration_store.h"
 #include "mjc/boot/identity_store.h"
 #include "mjc/boot/layout.h"
+#include "mjc/gpio/reset_line.h"
 #include "mjc/protocol/little_endian.h"
 
 namespace {
@@ -180,6 +182,51 @@ TEST(FirmwareUpdate, ABoardInAMotionIsRefusedAndNothingIsDone) {
   std::vector<std::uint8_t> region_after(4096);
   ASSERT_EQ(region.Read(0, region_after), protocol::BootError::kNone);
   EXPECT_TRUE(region_after == region_before);
+}
+
+// mjc flash --reset-line: the pulse right after the first hold restarts a board whose
+// application hangs, and the holds catch its bootloader in the hold window.
+TEST(FirmwareUpdate, AResetLineCatchesAHangingBoardInItsBootloader) {
+  FlashRig rig;
+  Commission(rig);
+  rig.PowerOn();
+  rig.RunMs(500);
+  ASSERT_TRUE(rig.board()->in_application());
+  rig.hung = true;  // its main loop and tick stopped: no frame, no answer
+  const auto image = Checked(PackedImage(kNewBuild, 8 * 1024, 3));
+  // Without a reset line nothing catches it: it talked, then went silent.
+  const host::UpdateResult without = rig.Update(kNode, image);
+  EXPECT_EQ(without.end, UpdateEnd::kFailed) << without.message;
+  EXPECT_NE(without.message.find("went silent while it was being caught"),
+            std::string::npos)
+      << without.message;
+
+  // NRST on a host's line: released after being driven, the board starts anew.
+  class Nrst final : public gpio::OutputLine {
+   public:
+    explicit Nrst(FlashRig* rig) : OutputLine("fake:nrst"), rig_(rig) {}
+    std::vector<bool> levels;
+
+   private:
+    bool DoSet(bool active, std::string*) override {
+      if (!levels.empty() && levels.back() && !active) rig_->PinReset();
+      levels.push_back(active);
+      return true;
+    }
+    FlashRig* rig_;
+  } nrst(&rig);
+  auto options = rig.Options();
+  std::string why;
+  options.after_first_hold = [&] {
+    EXPECT_EQ(rig.host_sent(protocol::Function::kBootHold) > 0, true);
+    // The board is held in reset while the line is low: no step of it is missed.
+    EXPECT_TRUE(gpio::PulseReset(nrst, &why, gpio::kResetPulse,
+                                 [&](std::chrono::nanoseconds) { rig.RunMs(10); }));
+  };
+  const host::UpdateResult r = rig.Update(kNode, image, options);
+  EXPECT_EQ(r.end, UpdateEnd::kUpdated) << r.message;
+  EXPECT_EQ(nrst.levels, (std::vector<bool>{true, false}));
+  ExpectRunning(rig, kNewBuild);
 }
 
 TEST(FirmwareUpdate, APowerCutMidUploadLeavesTheBootloaderWaitingAndASecondUpdateEndsIt) {
@@ -403,6 +450,16 @@ TEST(MjcFlash, BadFlagsAndBadFilesAreRefusedInOneLineBeforeTheBus) {
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   EXPECT_EQ(RunMjc("flash --iface mjc-none0 --info " + good, &err), 2);
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  // A reset line is one board's; a malformed one is a command-line error.
+  EXPECT_EQ(
+      RunMjc("flash --iface mjc-none0 --all --reset-line gpiochip0:3 " + good, &err), 2);
+  EXPECT_EQ(err,
+            "mjc flash: --reset-line is one board's NRST: give one --node (for several, "
+            "--reset takes each board's line from the config file's \"reset_lines\")\n");
+  EXPECT_EQ(
+      RunMjc("flash --iface mjc-none0 --node 2 --reset-line gpiochip0 " + good, &err), 2);
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find("is not CHIP:LINE"), std::string::npos) << err;
   // The good file passes its checks; only the interface stops it.
   EXPECT_EQ(RunMjc("flash --iface mjc-none0 --node 2 " + good, &err), 1);
   EXPECT_EQ(err.rfind("mjc flash: ", 0), 0u);

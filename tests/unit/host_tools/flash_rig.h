@@ -68,9 +68,19 @@ class FlashRig {
     board_link_.reset();
   }
 
+  // A hanging board: it takes no step (no tick, no main loop: no frame, no answer)
+  // until PinReset().
+  bool hung = false;
+  // The reset line (NRST) released after a pulse: the board starts anew, reset cause
+  // pin, RAM and flash kept.
+  void PinReset() {
+    hung = false;
+    if (board_) board_->PinReset();
+  }
+
   // One millisecond of board time (and of the host's clock); then the watch.
   void StepMs() {
-    if (board_) {
+    if (board_ && !hung) {
       for (int i = 0; i < 10; ++i) board_->Tick();
       board_->Poll();
     }

@@ -128,9 +128,8 @@ struct UpdateOptions {
   // which a reset or power cycle while the holds go on catches in its hold window).
   std::chrono::milliseconds enter_patience{30000};
   // Called once the first BootHold is on the bus. This is where a reset line's pulse
-  // goes (the GPIO library, host_tools/gpio, is not part of this build): holds sent from
-  // before the reset catch the bootloader in its 200 ms hold window whatever the
-  // application does.
+  // goes (mjc flash --reset-line: gpio::PulseReset): holds sent from before the reset
+  // catch the bootloader in its 200 ms hold window whatever the application does.
   std::function<void()> after_first_hold;
   // Once, when the application has not entered its bootloader after 2 s of its time.
   std::function<void(const std::string&)> hint;
