@@ -105,9 +105,6 @@ void AddSim(CLI::App& app) {
     const std::atomic<bool>& stop = StopOnSignals();
     std::signal(SIGUSR1, OnSensorFaultSignal);
     std::signal(SIGUSR2, OnSensorFaultSignal);
-    std::fprintf(
-        stderr, "mjc sim: node %d on %s (%s%s)\n", node, iface.c_str(), robot.c_str(),
-        subject.empty() ? ", robot alone" : (", " + subject + " donned").c_str());
     const double period = board.tick_period_s();
     std::uint64_t ticks = 0;
     // Pacing: tick n is due at origin + n·period/speed. A board that falls behind (a
@@ -128,6 +125,14 @@ void AddSim(CLI::App& app) {
       if (ticks % kPollEveryTicks == 0) {
         board.Poll();
         if (port.failed()) throw Failure(port.error());
+        // Said once the first pass has sent the board's BoardInfo and heartbeat: a
+        // script that waits for this line finds the board on the bus, not about to be.
+        if (ticks == 0) {
+          std::fprintf(
+              stderr, "mjc sim: node %d on %s (%s%s)\n", node, iface.c_str(),
+              robot.c_str(),
+              subject.empty() ? ", robot alone" : (", " + subject + " donned").c_str());
+        }
         for (; bus_off_seen < board.board().node().counters().bus_off; ++bus_off_seen) {
           std::fprintf(stderr,
                        "mjc sim: %s: bus-off at %.4f s: motor stopped (fault 303) until "

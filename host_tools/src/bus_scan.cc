@@ -1,5 +1,7 @@
 #include "mjc/host/bus_scan.h"
 
+#include <algorithm>
+
 #include "mjc/protocol/codec.h"
 
 namespace mjc::host {
@@ -26,7 +28,7 @@ void BusScan::Handle(const CanFrame& f) {
     BoardInfo info;
     if (Decode(f, &info) != DecodeError::kOk) return;
     n.identity.OnInfo(info);
-    ++n.infos;
+    ++n.infos[info.instance];
   } else if (function == static_cast<std::uint8_t>(Function::kHeartbeat)) {
     Heartbeat h;
     if (Decode(f, &h) != DecodeError::kOk) return;
@@ -37,8 +39,10 @@ void BusScan::Handle(const CanFrame& f) {
   }
   constexpr auto kTicks = static_cast<std::uint32_t>(kBoardInfoPeriod.count() * 11 / 10 *
                                                      kBoardTickHz / 1000);
-  n.shown = n.shown || n.identity.ambiguous() || n.infos >= 3 ||
-            n.identity.heartbeats() >= 30 || n.identity.elapsed_ticks() >= kTicks;
+  int most_infos = 0;
+  for (const auto& [instance, count] : n.infos) most_infos = std::max(most_infos, count);
+  n.shown = n.shown || most_infos >= 3 || n.identity.heartbeats() >= 30 ||
+            n.identity.elapsed_ticks() >= kTicks;
 }
 
 bool BusScan::Complete() const {

@@ -19,12 +19,15 @@ namespace mjc::host {
 struct ScannedNode {
   BoardIdentity identity;
   std::optional<protocol::Heartbeat> heartbeat;  // the last one
-  int infos = 0;                                 // BoardInfo frames heard
+  std::map<std::uint16_t, int> infos;            // BoardInfo frames heard, by instance
   std::uint64_t frames = 0;                      // frames the node sent
   // It has shown every board behind its id: its clock advanced 1.1 BoardInfo periods
-  // since first heard (each board answering for it sent a BoardInfo meanwhile), or it
-  // sent three BoardInfo frames (two periods, for a board without heartbeats), or 30
-  // heartbeats (three seconds at the default 10 Hz: a board whose clock does not move).
+  // since first heard (each board answering for it sent a BoardInfo meanwhile), or one
+  // of its instances sent three BoardInfo frames (two periods of its time, for a board
+  // without heartbeats, or two boards whose clocks interleave), or 30 heartbeats
+  // (three seconds at the default 10 Hz: a board whose clock does not move). Two
+  // boards told apart at once are no exception: the scan goes on while the other
+  // nodes' boards may not have spoken yet.
   bool shown = false;
 };
 
