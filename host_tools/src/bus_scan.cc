@@ -1,5 +1,7 @@
 #include "mjc/host/bus_scan.h"
 
+#include <algorithm>
+
 #include "mjc/boot/bootloader.h"
 #include "mjc/protocol/codec.h"
 
@@ -28,7 +30,7 @@ void BusScan::Handle(const CanFrame& f) {
     BoardInfo info;
     if (Decode(f, &info) != DecodeError::kOk) return;
     n.identity.OnInfo(info);
-    ++n.infos;
+    ++n.infos[info.instance];
   } else if (function == static_cast<std::uint8_t>(Function::kHeartbeat)) {
     Heartbeat h;
     if (Decode(f, &h) != DecodeError::kOk) return;
@@ -49,8 +51,9 @@ void BusScan::Handle(const CanFrame& f) {
                                                      kBoardTickHz / 1000);
   constexpr auto kBootTicks =
       boot::Bootloader::kInfoPeriodMs * 11 / 10 * (kBoardTickHz / 1000u);
-  n.shown = n.shown || n.identity.ambiguous() || n.infos >= 3 ||
-            n.identity.heartbeats() >= 30 ||
+  int most_infos = 0;
+  for (const auto& [instance, count] : n.infos) most_infos = std::max(most_infos, count);
+  n.shown = n.shown || most_infos >= 3 || n.identity.heartbeats() >= 30 ||
             n.identity.elapsed_ticks() >= (n.bootloader_clock ? kBootTicks : kTicks);
 }
 

@@ -16,7 +16,7 @@ plant=$here/../../sim_host/params/default.json
 # registered its receiver on vcan0.
 . "$(dirname "$0")/receivers.sh"
 # A simulated board is on the bus once it prints "mjc sim: node N on vcan0" (after its
-# socket, plant and flash are set up).
+# first pass of the main loop has sent its BoardInfo and heartbeat).
 wait_sim() {  # ERRFILE NODE
   wait_for "$1" "mjc sim: node $2 on vcan0"
 }

@@ -72,6 +72,29 @@ TEST(BusScan, TwoBoardsWithOneIdAreReported) {
   EXPECT_TRUE(scan.Complete());  // nothing more to learn
 }
 
+TEST(BusScan, TwoBoardsToldApartDoNotEndTheScanBeforeTheOtherNodesSpoke) {
+  // Node 2's boards, one 30 s into its time and one just started, are told apart at
+  // their first frames.
+  BusScan scan;
+  scan.Handle(Info(2, 0x1111));
+  scan.Handle(Beat(2, 300000));
+  scan.Handle(Info(2, 0x2222));
+  scan.Handle(Beat(2, 100));
+  scan.Handle(Info(2, 0x1111));
+  scan.Handle(Beat(2, 301000));
+  ASSERT_TRUE(scan.nodes().at(2).identity.ambiguous());
+  EXPECT_FALSE(scan.Complete());  // node 1's board may not have spoken yet
+  // It speaks late (a board stalled for a moment): heard, and shown by its own clock.
+  scan.Handle(Info(1, 0x3f2a));
+  for (std::uint32_t t = 0; t <= 1200; t += 100) scan.Handle(Beat(1, 5000 + t));
+  EXPECT_FALSE(scan.Complete());  // node 2's boards: two BoardInfo and one so far
+  scan.Handle(Info(2, 0x2222));
+  scan.Handle(Beat(2, 1100));
+  scan.Handle(Info(2, 0x1111));  // two periods of its time: every board has spoken
+  EXPECT_TRUE(scan.Complete());
+  EXPECT_EQ(scan.nodes().size(), 2u);
+}
+
 TEST(BusScan, ABoardWithoutHeartbeatsIsShownByItsBoardInfo) {
   // A bootloader, say: BoardInfo alone, once a second of its time.
   BusScan scan;

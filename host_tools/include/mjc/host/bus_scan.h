@@ -24,14 +24,16 @@ struct ScannedNode {
   std::optional<protocol::BootStatus> boot_status;
   // Its clock was last read from a BootStatus (a bootloader's), not a heartbeat.
   bool bootloader_clock = false;
-  int infos = 0;             // BoardInfo frames heard
-  std::uint64_t frames = 0;  // frames the node sent
+  std::map<std::uint16_t, int> infos;  // BoardInfo frames heard, by instance
+  std::uint64_t frames = 0;            // frames the node sent
   // It has shown every board behind its id: its clock advanced 1.1 BoardInfo periods
   // since first heard (each board answering for it sent a BoardInfo meanwhile: 110 ms
   // of an application's time, 1.1 s of a bootloader's, which sends one a second and its
-  // clock in its BootStatus), or it sent three BoardInfo frames (two periods, for a
-  // board without heartbeats), or 30 heartbeats or BootStatus frames (three seconds at
-  // 10 Hz: a board whose clock does not move).
+  // clock in its BootStatus), or one of its instances sent three BoardInfo frames (two
+  // periods of its time, for a board without heartbeats, or two boards whose clocks
+  // interleave), or 30 heartbeats or BootStatus frames (three seconds at 10 Hz: a board
+  // whose clock does not move). Two boards told apart at once are no exception: the scan
+  // goes on while the other nodes' boards may not have spoken yet.
   bool shown = false;
 
   bool in_bootloader() const {
