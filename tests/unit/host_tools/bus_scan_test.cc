@@ -144,10 +144,16 @@ TEST(BusScan, TwoBootloadersWithOneIdAreReported) {
   info.instance = 0x1111;
   scan.Handle(protocol::Encode(info, 6));
   info.instance = 0x2222;
-  for (std::uint32_t ms = 0; ms < 600; ms += 100) {
+  // Told apart at once, yet the node shows itself like any other (30 BootStatus frames
+  // here: their clocks interleave), so the scan goes on while other nodes may speak.
+  for (std::uint32_t ms = 0; ms < 1500; ms += 100) {
     scan.Handle(Status(6, 5000 + ms));
     scan.Handle(Status(6, 40 + ms));  // the other's clock, started later
-    if (ms == 300) scan.Handle(protocol::Encode(info, 6));
+    if (ms == 300) {
+      scan.Handle(protocol::Encode(info, 6));
+      EXPECT_TRUE(scan.nodes().at(6).identity.ambiguous());
+      EXPECT_FALSE(scan.Complete());
+    }
   }
   EXPECT_TRUE(scan.nodes().at(6).identity.ambiguous());
   EXPECT_TRUE(scan.Complete());
