@@ -1,19 +1,22 @@
 // mjc cal show|upload|download: a calibration file, its upload to a board over ISO-TP,
 // and the calibration a board holds.
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 
 #include "commands.h"
 #include "mjc/host/calibration_io.h"
 #include "mjc/host/describe.h"
 #include "mjc/host/report.h"
+#include "mjc/host/units.h"
 
 namespace mjc::cli {
 namespace {
 
 // The calibration in `file`, checked with the board's rules; throws Failure naming the
-// file and the field.
-protocol::CalibrationRecord Load(const std::string& file) {
+// file and the field. Values the board accepts but no Maestro joint has are said on
+// stderr, a line each, under `command`'s name.
+protocol::CalibrationRecord Load(const std::string& file, const char* command) {
   std::ifstream in(file);
   if (!in) throw Failure("cannot read " + file);
   nlohmann::json j;
@@ -23,9 +26,37 @@ protocol::CalibrationRecord Load(const std::string& file) {
     throw Failure(file + " is not JSON: " + e.what());
   }
   std::string why;
-  const auto record = host::CalibrationFromJson(j, &why);
+  std::vector<std::string> warnings;
+  const auto record = host::CalibrationFromJson(j, &why, &warnings);
   if (!record) throw Failure(file + ": " + why);
+  for (const std::string& w : warnings) {
+    std::fprintf(stderr, "%s: warning: %s: %s\n", command, file.c_str(), w.c_str());
+  }
   return *record;
+}
+
+// For people: the values in their units, the fit when the file has one.
+std::string Describe(const protocol::CalibrationRecord& r) {
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "backlash   c_right %+.4f°  c_left %+.4f°  alpha %.4f\n"
+                "SEA        stiffness %.4f N·m/rad\n"
+                "joint      zero count %u\n",
+                host::RadToDeg(r.backlash.c_right.ToDouble()),
+                host::RadToDeg(r.backlash.c_left.ToDouble()), r.backlash.alpha.ToDouble(),
+                r.sea_stiffness.ToDouble(), static_cast<unsigned>(r.joint_zero_count));
+  std::string out = text;
+  if (r.fitted_at_unix_s != 0) {
+    const auto when = static_cast<std::time_t>(r.fitted_at_unix_s);
+    char date[32];
+    std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&when));
+    std::snprintf(text, sizeof text, "fit        rms %.4f°  lag %.2f ms  at %s\n",
+                  host::RadToDeg(r.fit_rms_urad * 1e-6), r.fit_lag_us * 1e-3, date);
+    out += text;
+  } else {
+    out += "fit        none recorded (read from a board, or written by hand)\n";
+  }
+  return out;
 }
 
 }  // namespace
@@ -35,13 +66,22 @@ void AddCal(CLI::App& app) {
   cal->require_subcommand(1);
   static std::string file, iface, out;
   static int node = 1, timeout_ms = 1000;
+  static bool json = false;
 
   auto* show =
       cal->add_subcommand("show", "Print a calibration file after the board's checks");
   show->add_option("file", file, "Calibration JSON (as mjc calibrate writes)")
       ->required();
-  show->callback(
-      [] { std::printf("%s\n", host::CalibrationToJson(Load(file)).dump(2).c_str()); });
+  show->add_flag("--json", json, "Print it as JSON (the file's own form, checked)");
+  show->callback([] {
+    const protocol::CalibrationRecord record = Load(file, "mjc cal show");
+    if (json) {
+      std::printf("%s\n", host::CalibrationToJson(record).dump(2).c_str());
+    } else {
+      std::printf("%s (accepted by the board's checks)\n%s", file.c_str(),
+                  Describe(record).c_str());
+    }
+  });
 
   auto* download = cal->add_subcommand("download", "Read a board's calibration back");
   AddIfaceOption(download, &iface);
@@ -50,6 +90,7 @@ void AddCal(CLI::App& app) {
   download->callback([] {
     auto link = OpenLink(iface);
     host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
+    IdentifyOrThrow(board);
     std::string why;
     const auto held = host::ReadCalibration(board, &why);
     if (!held) throw Failure(NoAnswer(board), why);
@@ -76,18 +117,26 @@ void AddCal(CLI::App& app) {
   AddIfaceOption(upload, &iface);
   AddNodeOption(upload, &node);
   upload->add_option("--timeout-ms", timeout_ms, "Wait this long for the board's answer")
-      ->check(CLI::Range(10, 60000))
+      ->check(InRange(10, 60000, "ms"))
       ->capture_default_str();
   upload->callback([] {
-    const protocol::CalibrationRecord record = Load(file);
+    const protocol::CalibrationRecord record = Load(file, "mjc cal upload");
+    // Who answers first: a record sent to a node two boards answer for would calibrate
+    // both, or whichever took it.
+    {
+      auto link = OpenLink(iface);
+      host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
+      IdentifyOrThrow(board, std::chrono::milliseconds(timeout_ms));
+    }
     std::string why;
     const auto outcome = host::UploadCalibration(iface, node, record, timeout_ms, &why);
-    const std::string who = "node " + std::to_string(node) + " on " + iface;
+    const std::string who = "node " + std::to_string(node);
     switch (outcome.status) {
       case host::UploadStatus::kLinkFailed:
-        throw Failure("cannot send to " + who + ": " + why);
+        throw Failure("cannot send to " + who + " on " + iface + ": " + why);
       case host::UploadStatus::kNoAnswer:
-        throw Failure(Exit::kNoAnswer, who + " did not answer (" + why + ")");
+        throw Failure(Exit::kNoAnswer, who + " did not answer the upload within " +
+                                           std::to_string(timeout_ms) + " ms");
       case host::UploadStatus::kMalformedReply:
         throw Failure(Exit::kNoAnswer, "malformed answer: " + why);
       case host::UploadStatus::kAnswered:

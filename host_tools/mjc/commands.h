@@ -8,14 +8,18 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "mjc/host/board_client.h"
 #include "mjc/host/can_link.h"
+#include "mjc/host/config.h"
 #include "mjc/protocol/can_frame.h"
 
 namespace mjc::cli {
@@ -29,13 +33,15 @@ inline constexpr double kMaxFrequencyHz = 5.0;
 // The exit status of every subcommand. Stable: scripts test them.
 enum class Exit : int {
   kOk = 0,
-  kFailure = 1,   // on this side: bad or unwritable file, interface, link, unusable fit
-  kUsage = 2,     // bad command line
-  kNoAnswer = 3,  // a node did not answer, went silent or did not finish in time
-  kRefused = 4,   // the board refused, holds no calibration, or did not keep it
-  kFaulted = 5,   // the board faulted while carrying it out
-  kStopped = 6,   // the motion ended before its end: interrupted here (a signal; the
-                  // board was told to stop) or stopped by another tool
+  kFailure = 1,    // on this side: bad or unwritable file, interface, link, unusable fit
+  kUsage = 2,      // bad command line
+  kNoAnswer = 3,   // a node did not answer, went silent or did not finish in time
+  kRefused = 4,    // the board refused, holds no calibration, or did not keep it
+  kFaulted = 5,    // the board faulted while carrying it out
+  kStopped = 6,    // the motion ended before its end: interrupted here (a signal; the
+                   // board was told to stop) or stopped by another tool
+  kAmbiguous = 7,  // two boards answer with one node id: nothing was done to it (a
+                   // motion already running was stopped)
 };
 
 // The footer of every --help.
@@ -45,7 +51,14 @@ inline constexpr const char* kExitStatusHelp =
     "silent or did not finish in time; 4 the board refused, holds no calibration or "
     "did not keep what was sent; 5 the board faulted; 6 the motion was stopped before "
     "its end (interrupted: the board was stopped and what arrived is saved; or stopped "
-    "by another tool).";
+    "by another tool); 7 two boards answer with one node id (nothing was done to it; "
+    "give each board its own id).\n"
+    "Defaults: --iface from MJC_IFACE, else the config file's \"iface\", else vcan0; "
+    "--node from its \"node\", else 1. The config file is $MJC_CONFIG, else "
+    "~/.config/mjc/config.json (JSON: {\"iface\": \"can0\", \"node\": 2}; an unknown "
+    "key is an error). The command line wins.\n"
+    "No CAN interface on this machine? scripts/kernel-vm shell starts a virtual machine "
+    "with vcan0 and this tree mounted.";
 
 class Failure : public std::runtime_error {
  public:
@@ -58,25 +71,77 @@ class Failure : public std::runtime_error {
 };
 
 // The status of a request to `board` that got no answer: kFailure when this side's
-// link failed, kNoAnswer when the board stayed silent.
+// link failed, kAmbiguous when two boards answer, kNoAnswer when the board stayed
+// silent.
 inline Exit NoAnswer(const host::BoardClient& board) {
-  return board.link_failed() ? Exit::kFailure : Exit::kNoAnswer;
+  if (board.link_failed()) return Exit::kFailure;
+  return board.ambiguous() ? Exit::kAmbiguous : Exit::kNoAnswer;
 }
 
-// --iface, defaulting to vcan0.
+// The defaults the command line starts from (main loads them before the subcommands
+// are added): the config file's, with MJC_IFACE over its interface.
+host::ToolConfig& Defaults();
+
+// --iface, defaulting to MJC_IFACE, the config file's, or vcan0.
 inline CLI::Option* AddIfaceOption(CLI::App* cmd, std::string* iface,
                                    const char* help = "CAN interface") {
-  *iface = "vcan0";
+  *iface = Defaults().iface.value_or("vcan0");
   return cmd->add_option("--iface", *iface, help)->capture_default_str();
 }
 
+// A number within [lo, hi] (inclusive), for options and each value of a vector option:
+// a refusal names the value and the range ("--amplitudes: 100 is outside 1..90 °").
+inline CLI::Validator InRange(double lo, double hi, const std::string& unit = "") {
+  const auto text = [](double v) {
+    char out[32];
+    std::snprintf(out, sizeof out, "%g", v);
+    return std::string(out);
+  };
+  const std::string range = text(lo) + ".." + text(hi) +
+                            (unit.empty()  ? ""
+                             : unit == "°" ? unit
+                                           : " " + unit);
+  return CLI::Validator(
+      [=](std::string& value) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(value.c_str(), &end);
+        if (value.empty() || end == nullptr || *end != '\0' || !std::isfinite(v)) {
+          return "'" + value + "' is not a number";
+        }
+        if (v < lo || v > hi) return value + " is outside " + range;
+        return std::string();
+      },
+      "in " + range);
+}
+
 // --node into an int (one node) or a std::vector<int> (several), checked against the
-// protocol's node range.
+// protocol's node range; its default the config file's node, else 1.
 template <class T>
 CLI::Option* AddNodeOption(CLI::App* cmd, T* node, const char* help = "Node id") {
+  const int fallback = Defaults().node.value_or(1);
+  if constexpr (std::is_same_v<T, int>) {
+    *node = fallback;
+  } else {
+    *node = {fallback};
+  }
   return cmd->add_option("--node", *node, help)
-      ->check(CLI::Range(int{protocol::kMinNode}, int{protocol::kMaxNode}))
+      ->check(InRange(protocol::kMinNode, protocol::kMaxNode))
       ->capture_default_str();
+}
+
+// --out and --force of a command that writes a run's folder (see host::OutputFolder).
+struct OutputOptions {
+  std::string out;
+  bool force = false;
+};
+inline void AddOutputOptions(CLI::App* cmd, OutputOptions* options,
+                             const std::string& base) {
+  cmd->add_option("--out", options->out,
+                  "Output folder (default: a new " + base +
+                      "/<UTC time>/; an existing non-empty one is refused without "
+                      "--force)");
+  cmd->add_flag("--force", options->force,
+                "Write into an existing --out folder, replacing an earlier run's files");
 }
 
 // The raw CAN link on `iface`; throws Failure naming the interface when it cannot open.
@@ -90,14 +155,52 @@ inline std::unique_ptr<host::SocketCanLink> OpenLink(const std::string& iface) {
 // Has `board`'s waits say on stderr, the moment they see it, that `iface`'s controller
 // reported bus-off: frames are lost until it recovers, and a board on a failing bus
 // stops with kCanBusOff (the tool then reports the fault itself).
+// A progress line on stderr, rewritten in place ("\r"), and its end: a message that
+// follows starts on a line of its own, with no empty line when none was open.
+inline bool& ProgressOpen() {
+  static bool open = false;
+  return open;
+}
+inline void Progress(const std::string& line) {
+  std::fprintf(stderr, "\r%s   ", line.c_str());
+  ProgressOpen() = true;
+}
+inline void EndProgress() {
+  if (ProgressOpen()) std::fputc('\n', stderr);
+  ProgressOpen() = false;
+}
+
 inline void SayBusOff(host::BoardClient& board, const std::string& command,
                       const std::string& iface) {
   board.OnBusOff([command, iface](std::uint64_t total) {
+    EndProgress();
     std::fprintf(stderr,
-                 "\n%s: %s: the CAN controller reported bus-off (%llu since start): "
+                 "%s: %s: the CAN controller reported bus-off (%llu since start): "
                  "frames are lost until it recovers\n",
                  command.c_str(), iface.c_str(), static_cast<unsigned long long>(total));
   });
+}
+
+// The run.json end for a tool's exit status.
+inline const char* OutcomeOf(Exit exit) {
+  switch (exit) {
+    case Exit::kOk:
+      return "completed";
+    case Exit::kNoAnswer:
+      return "no_answer";
+    case Exit::kRefused:
+      return "refused";
+    case Exit::kFaulted:
+      return "faulted";
+    case Exit::kStopped:
+      return "interrupted";
+    case Exit::kAmbiguous:
+      return "ambiguous";
+    case Exit::kFailure:
+    case Exit::kUsage:
+      break;
+  }
+  return "failed";
 }
 
 namespace detail {
@@ -126,8 +229,32 @@ inline std::string StopMotion(host::BoardClient& board) {
   const std::string who = "node " + std::to_string(board.node());
   if (outcome && *outcome == protocol::CommandOutcomeCode::kAccepted)
     return who + " stopped";
+  if (board.ambiguous())
+    return who + "'s boards were sent a stop (two answer: unconfirmed)";
   return who + " did not confirm the stop (" + (outcome ? "refused" : why) +
          "); it stops by itself once this tool's heartbeat stays away";
+}
+
+// Listens to `board` until it has shown who it is (BoardClient::Identify), before a
+// command acts on it: throws Failure when it is silent (kNoAnswer) or two boards answer
+// with its id (kAmbiguous).
+inline void IdentifyOrThrow(host::BoardClient& board, std::chrono::milliseconds silence =
+                                                          host::Patience{}.silence) {
+  host::WaitEnd end{};
+  std::string why;
+  if (board.Identify(&end, &why, silence)) return;
+  switch (end) {
+    case host::WaitEnd::kAmbiguous:
+      throw Failure(Exit::kAmbiguous, why + "; nothing was done");
+    case host::WaitEnd::kLinkFailed:
+      throw Failure(why);
+    case host::WaitEnd::kInterrupted:
+      throw Failure(Exit::kStopped, "interrupted before anything was done");
+    case host::WaitEnd::kSilent:
+    case host::WaitEnd::kBoardTime:
+      break;
+  }
+  throw Failure(Exit::kNoAnswer, why);
 }
 
 void AddSim(CLI::App& app);
@@ -140,5 +267,6 @@ void AddReport(CLI::App& app);
 void AddMonitor(CLI::App& app);
 void AddClear(CLI::App& app);
 void AddStop(CLI::App& app);
+void AddList(CLI::App& app);
 
 }  // namespace mjc::cli

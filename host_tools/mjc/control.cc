@@ -18,21 +18,6 @@ namespace {
 using protocol::CommandCode;
 using protocol::CommandOutcomeCode;
 
-// A board's heartbeat (its state and latched fault); false if it says nothing for
-// timeout_ms.
-bool AwaitHeartbeat(host::BoardClient& board, int timeout_ms, std::string* why) {
-  host::WaitEnd end{};
-  const std::chrono::milliseconds timeout{timeout_ms};
-  if (board.Await([&] { return board.status().heard; }, {timeout, timeout}, &end, why)) {
-    return true;
-  }
-  if (end == host::WaitEnd::kSilent) {
-    *why = "node " + std::to_string(board.node()) + " sent no heartbeat within " +
-           std::to_string(timeout_ms) + " ms";
-  }
-  return false;
-}
-
 // Sends `code` to every node and prints what each answered. Once all were asked, throws
 // the worst status with every failure: one silent node does not keep the others from
 // their command.
@@ -50,9 +35,13 @@ void CommandEach(const std::string& iface, const std::vector<int>& nodes,
     SayBusOff(board, code == CommandCode::kClearFaults ? "mjc clear" : "mjc stop", iface);
     const std::string who = "node " + std::to_string(node);
     std::string why;
-    // A clear first learns the fault held, to say what it cleared; a stop goes at once.
-    if (code == CommandCode::kClearFaults && !AwaitHeartbeat(board, timeout_ms, &why)) {
-      fail(NoAnswer(board), why);
+    // A clear first learns who answers and the fault held, to say what it cleared, and
+    // refuses a node two boards answer for; a stop goes at once (stopping both boards
+    // of an ambiguous node is safe, and a stop must not wait).
+    host::WaitEnd end{};
+    if (code == CommandCode::kClearFaults &&
+        !board.Identify(&end, &why, std::chrono::milliseconds(timeout_ms))) {
+      fail(NoAnswer(board), why + (board.ambiguous() ? "; not cleared" : ""));
       continue;
     }
     const Fault before = board.status().fault;
@@ -97,15 +86,16 @@ void CommandEach(const std::string& iface, const std::vector<int>& nodes,
 void AddNodeCommand(CLI::App& app, const char* name, const char* help, CommandCode code) {
   struct Options {
     std::string iface;
-    std::vector<int> nodes = {1};
+    std::vector<int> nodes;
     int timeout_ms = 1000;
   };
   auto options = std::make_shared<Options>();
   auto* cmd = app.add_subcommand(name, help);
   AddIfaceOption(cmd, &options->iface);
   AddNodeOption(cmd, &options->nodes, "Node ids");
-  cmd->add_option("--timeout-ms", options->timeout_ms, "Wait this long for each board")
-      ->check(CLI::Range(10, 60000))
+  cmd->add_option("--timeout-ms", options->timeout_ms,
+                  "Wait this long (of the board's time) for each board's answer")
+      ->check(InRange(10, 60000, "ms"))
       ->capture_default_str();
   cmd->callback([options, code] {
     CommandEach(options->iface, options->nodes, code, options->timeout_ms);

@@ -1,13 +1,18 @@
 // mjc monitor: live values of one or more boards (state, calibration, fault, angles,
-// torque, power, energy), a line per node every interval, and a line for the bus once
-// it has reported errors (error frames, bus-off). A node that has not sent a heartbeat
-// for two seconds is reported silent; the exit status is then Exit::kNoAnswer. While it
-// runs it supervises: each node gets the host's heartbeat, so a motion still running
-// when the monitor stops or dies is stopped by the board (kHostHeartbeatLost).
+// torque, power, energy), a line per node every interval stamped with the time (UTC),
+// and a line for the bus once it has reported errors (error frames, bus-off). A node
+// not heard yet reads "no data yet", never a line of zeros; one whose heartbeat stays
+// away for two seconds is reported silent, and so is the exit status (Exit::kNoAnswer);
+// two boards answering with one node id are reported, and the exit status is then
+// Exit::kAmbiguous. --json prints one JSON object per line instead. While it runs it
+// supervises: each node gets the host's heartbeat, so a motion still running when the
+// monitor stops or dies is stopped by the board (kHostHeartbeatLost).
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -18,18 +23,18 @@
 namespace mjc::cli {
 namespace {
 
-const char* StateName(protocol::BoardState s) {
-  switch (s) {
-    case protocol::BoardState::kIdle:
-      return "idle";
-    case protocol::BoardState::kCalibrating:
-      return "calibrating";
-    case protocol::BoardState::kRunning:
-      return "running";
-    case protocol::BoardState::kFault:
-      return "FAULT";
-  }
-  return "?";
+// "2026-11-24T10:31:05.123Z" (full) or "10:31:05.123Z" (the time of day).
+std::string Utc(std::chrono::system_clock::time_point t, bool full) {
+  const auto ms =
+      std::chrono::duration_cast<std::chrono::milliseconds>(t.time_since_epoch()).count();
+  const std::time_t s = static_cast<std::time_t>(ms / 1000);
+  std::tm tm{};
+  gmtime_r(&s, &tm);
+  char text[40];
+  std::strftime(text, sizeof text, full ? "%Y-%m-%dT%H:%M:%S" : "%H:%M:%S", &tm);
+  char out[48];
+  std::snprintf(out, sizeof out, "%s.%03dZ", text, static_cast<int>(ms % 1000));
+  return out;
 }
 
 }  // namespace
@@ -38,16 +43,18 @@ void AddMonitor(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "monitor", "Live values of boards on the bus; supervises them (host heartbeat)");
   static std::string iface;
-  static std::vector<int> nodes = {1};
+  static std::vector<int> nodes;
   static double seconds = 0;
   static int interval_ms = 500;
+  static bool json = false;
   AddIfaceOption(cmd, &iface);
   AddNodeOption(cmd, &nodes, "Node ids");
   cmd->add_option("--seconds", seconds, "Stop after this long (0: until SIGINT)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(InRange(0, 1e9, "s"));
   cmd->add_option("--interval-ms", interval_ms, "Time between lines")
-      ->check(CLI::Range(50, 60000))
+      ->check(InRange(50, 60000, "ms"))
       ->capture_default_str();
+  cmd->add_flag("--json", json, "One JSON object per node (and bus report) and line");
   cmd->callback([] {
     // A link per node: each client filters its link to its own node.
     std::vector<std::unique_ptr<host::SocketCanLink>> links;
@@ -64,52 +71,112 @@ void AddMonitor(CLI::App& app) {
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::chrono::steady_clock::time_point> last_heard(boards.size(), start);
     std::vector<std::uint32_t> last_tick(boards.size(), 0);
-    std::string silent;
+    std::vector<bool> silent(boards.size(), false), ambiguous(boards.size(), false);
     std::string why;
     while (!stop) {
       const auto until =
           std::chrono::steady_clock::now() + std::chrono::milliseconds(interval_ms);
-      while (std::chrono::steady_clock::now() < until) {
+      while (std::chrono::steady_clock::now() < until && !stop) {
         for (auto& b : boards) {
           if (!b->Poll(5, &why)) throw Failure(why);
         }
       }
       const auto now = std::chrono::steady_clock::now();
+      const auto wall = std::chrono::system_clock::now();
+      const std::string stamp = Utc(wall, json);
       for (std::size_t i = 0; i < boards.size(); ++i) {
-        const host::BoardStatus& s = boards[i]->status();
+        const host::BoardClient& b = *boards[i];
+        const host::BoardStatus& s = b.status();
         if (s.heard && s.tick != last_tick[i]) {
           last_heard[i] = now;
           last_tick[i] = s.tick;
         }
-        if (now - last_heard[i] > std::chrono::seconds(2)) {
-          std::printf("node %d: silent (no heartbeat for 2 s)\n", nodes[i]);
-          const std::string id = std::to_string(nodes[i]);
-          if (silent.find(" " + id + ",") == std::string::npos) silent += " " + id + ",";
+        const bool quiet = now - last_heard[i] > std::chrono::seconds(2);
+        silent[i] = silent[i] || quiet;
+        ambiguous[i] = ambiguous[i] || b.ambiguous();
+        if (json) {
+          nlohmann::json j = {{"time", stamp}, {"node", nodes[i]}, {"heard", s.heard}};
+          j["silent"] = quiet;
+          j["ambiguous"] = b.ambiguous();
+          if (b.ambiguous()) j["message"] = b.AmbiguityMessage();
+          if (s.heard) {
+            j["state"] = host::StateName(s.state);
+            j["calibrated"] = s.calibrated;
+            j["fault"] = s.fault == Fault::kNone
+                             ? nlohmann::json(nullptr)
+                             : nlohmann::json{{"code", static_cast<int>(s.fault)},
+                                              {"name", host::FaultName(s.fault)}};
+            j["tick"] = s.tick;
+            j["motor_rad"] = s.motor_rad;
+            j["joint_rad"] = s.joint_rad;
+            j["torque_Nm"] = s.torque_Nm;
+            j["power_W"] = s.power_W;
+            j["energy_J"] = s.energy_J;
+          }
+          if (const auto& info = b.info()) {
+            j["build"] = host::BuildName(info->build, info->dirty);
+            j["instance"] = info->instance;
+          }
+          std::printf("%s\n", j.dump().c_str());
+          continue;
+        }
+        if (b.ambiguous()) {
+          std::printf("%s node %d: TWO BOARDS: %s\n", stamp.c_str(), nodes[i],
+                      b.AmbiguityMessage().c_str());
+          continue;
+        }
+        if (!s.heard) {
+          std::printf("%s node %d: no data yet\n", stamp.c_str(), nodes[i]);
+          continue;
+        }
+        if (quiet) {
+          std::printf("%s node %d: silent (no heartbeat for 2 s)\n", stamp.c_str(),
+                      nodes[i]);
           continue;
         }
         const std::string fault =
             s.fault == Fault::kNone ? "" : "  fault " + host::DescribeFault(s.fault);
         std::printf(
-            "node %d: %-11s %-12s θm %+8.4f rad  θj %+8.4f rad  τ %+7.4f N·m  "
+            "%s node %d: %-11s %-12s θm %+8.4f rad  θj %+8.4f rad  τ %+7.4f N·m  "
             "P %+8.3f mW  E %9.3f mJ%s\n",
-            nodes[i], StateName(s.state), s.calibrated ? "calibrated" : "uncalibrated",
-            s.motor_rad, s.joint_rad, s.torque_Nm, s.power_W * 1e3, s.energy_J * 1e3,
-            fault.c_str());
+            stamp.c_str(), nodes[i], std::string(host::StateName(s.state)).c_str(),
+            s.calibrated ? "calibrated" : "uncalibrated", s.motor_rad, s.joint_rad,
+            s.torque_Nm, s.power_W * 1e3, s.energy_J * 1e3, fault.c_str());
       }
       const host::LinkStats& bus = links.front()->stats();
       if (bus.error_frames > 0) {
-        std::printf("%s: %llu error frames since start, %llu of them bus-off%s\n",
-                    iface.c_str(), static_cast<unsigned long long>(bus.error_frames),
-                    static_cast<unsigned long long>(bus.bus_off),
-                    bus.bus_off > 0 ? " (BUS-OFF)" : "");
+        if (json) {
+          std::printf("%s\n", nlohmann::json{{"time", stamp},
+                                             {"iface", iface},
+                                             {"error_frames", bus.error_frames},
+                                             {"bus_off", bus.bus_off}}
+                                  .dump()
+                                  .c_str());
+        } else {
+          std::printf("%s %s: %llu error frames since start, %llu of them bus-off%s\n",
+                      stamp.c_str(), iface.c_str(),
+                      static_cast<unsigned long long>(bus.error_frames),
+                      static_cast<unsigned long long>(bus.bus_off),
+                      bus.bus_off > 0 ? " (BUS-OFF)" : "");
+        }
       }
       std::fflush(stdout);
       if (seconds > 0 && now - start >= std::chrono::duration<double>(seconds)) break;
     }
-    if (!silent.empty()) {
-      silent.pop_back();
-      throw Failure(Exit::kNoAnswer, "silent node(s):" + silent);
+    std::string failures;
+    Exit worst = Exit::kOk;
+    for (std::size_t i = 0; i < boards.size(); ++i) {
+      std::string what;
+      if (ambiguous[i]) {
+        what = boards[i]->AmbiguityMessage();
+        worst = Exit::kAmbiguous;
+      } else if (silent[i]) {
+        what = host::SilentNode(nodes[i], iface);
+        if (worst == Exit::kOk) worst = Exit::kNoAnswer;
+      }
+      if (!what.empty()) failures += (failures.empty() ? "" : "; ") + what;
     }
+    if (worst != Exit::kOk) throw Failure(worst, failures);
   });
 }
 

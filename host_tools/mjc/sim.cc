@@ -15,11 +15,12 @@
 #include "commands.h"
 #include "hal/sim/sim_flash.h"
 #include "mjc/app/joint_board.h"
+#include "mjc/app/joint_config.h"
 #include "mjc/build_id.h"
 #include "mjc/host/can_link.h"
 #include "mjc/plant/params.h"
 #include "mjc/sim/link_can_port.h"
-#include "mjc/sim/scenarios.h"
+#include "mjc/sim/sim_board.h"
 
 namespace mjc::cli {
 namespace {

@@ -3,7 +3,8 @@
 // to re-don); "amplitude": five repetitions at each amplitude. The board estimates and
 // integrates; this reports the middle three flexions of every trial: tables on stdout,
 // every window in windows.csv (rewritten after each trial, so a later failure loses
-// nothing), a figure (gnuplot) in the output folder.
+// nothing), run.json (the board, its calibration, the protocol, how the run ended) and
+// a figure (gnuplot) in a new output folder.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +13,10 @@
 #include <vector>
 
 #include "commands.h"
+#include "mjc/build_id.h"
+#include "mjc/host/calibration_io.h"
+#include "mjc/host/describe.h"
+#include "mjc/host/run_record.h"
 #include "mjc/host/trial_report.h"
 #include "mjc/host/trial_runner.h"
 #include "mjc/host/units.h"
@@ -34,16 +39,23 @@ Exit ExitOf(host::TrialEnd end) {
     case host::TrialEnd::kInterrupted:
     case host::TrialEnd::kStopped:
       return Exit::kStopped;
+    case host::TrialEnd::kAmbiguous:
+      return Exit::kAmbiguous;
   }
   return Exit::kFailure;
 }
+
+// The files a trial run writes into its folder (replaced under --force).
+const std::vector<std::string> kOutputs = {"windows.csv", "run.json",   "eta.png",
+                                           "eta.gp",      "eta.gp.log", "report.md"};
 
 }  // namespace
 
 void AddTrial(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("trial", "Run the paper's repeatability or amplitude protocol");
-  static std::string iface, protocol_name = "repeatability", out_dir = "out/trial";
+  static std::string iface, protocol_name = "repeatability", subject;
+  static OutputOptions output;
   static int node = 1, trials = 5, reps = 5;
   static double amplitude_deg = 25, frequency_hz = 0.5, rest_s = 1.5;
   static std::vector<double> amplitudes = {6, 8, 11, 15, 20, 25};
@@ -54,114 +66,190 @@ void AddTrial(CLI::App& app) {
       ->check(CLI::IsMember({"repeatability", "amplitude"}))
       ->capture_default_str();
   cmd->add_option("--trials", trials, "Repeatability: number of trials")
-      ->check(CLI::Range(1, 50))
+      ->check(InRange(1, 50))
       ->capture_default_str();
   cmd->add_option("--reps", reps, "Repetitions per trial")
-      ->check(CLI::Range(3, 50))
+      ->check(InRange(3, 50))
       ->capture_default_str();
   cmd->add_option("--amplitude-deg", amplitude_deg, "Repeatability: amplitude")
-      ->check(CLI::Range(1.0, 90.0))
+      ->check(InRange(1.0, 90.0, "°"))
       ->capture_default_str();
   cmd->add_option("--amplitudes", amplitudes, "Amplitude protocol: amplitudes (deg)")
-      ->check(CLI::Range(1.0, 90.0))
+      ->check(InRange(1.0, 90.0, "°"))
       ->capture_default_str();
   cmd->add_option("--frequency-hz", frequency_hz, "Sine frequency")
-      ->check(CLI::Range(kMinFrequencyHz, kMaxFrequencyHz))
+      ->check(InRange(kMinFrequencyHz, kMaxFrequencyHz, "Hz"))
       ->capture_default_str();
   cmd->add_option("--rest-s", rest_s, "Rest before and after each trial")
-      ->check(CLI::Range(0.0, 25.0))
+      ->check(InRange(0.0, 25.0, "s"))
       ->capture_default_str();
+  cmd->add_option("--subject", subject,
+                  "Who wears the device (an id, recorded in run.json and the figure)");
   cmd->add_flag("--pause", pause, "Wait for Enter between trials (re-donning)");
-  cmd->add_option("--out", out_dir, "Output folder")->capture_default_str();
+  AddOutputOptions(cmd, &output, "out/trial");
   cmd->add_flag("!--no-figure", figure, "Tables and windows.csv only (no gnuplot)");
   cmd->callback([] {
-    // The output folder first: an unwritable one is found before the trials run.
-    std::filesystem::create_directories(out_dir);
+    host::OutputFolder folder;
+    try {
+      folder = host::PrepareOutputFolder(output.out, "out/trial", output.force, kOutputs);
+    } catch (const std::exception& e) {
+      throw Failure(e.what());
+    }
+    const std::filesystem::path dir = folder.path;
+    const std::string saved = (dir / "windows.csv").string();
+    std::fprintf(stderr, "mjc trial: writing to %s/%s\n", dir.c_str(),
+                 folder.chosen ? " (a new folder)" : "");
+    // Written first: an unwritable folder is found before the trials run.
     std::vector<host::TrialWindows> runs;
-    host::WriteWindowsCsv(runs, out_dir);
-    auto link = OpenLink(iface);
-    // Heartbeats flow while a trial runs: if this tool dies, the board stops it. The
-    // --pause prompt waits with the board at rest, where their absence is harmless.
-    host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
-                            host::HostHeartbeats::kSend);
-    SayBusOff(board, "mjc trial", iface);
-    // Ctrl-C (or SIGTERM, SIGHUP) ends the waits: the motion is stopped and every
-    // window that arrived is kept.
-    const std::atomic<bool>& interrupted = StopOnSignals();
-    board.SetInterrupt(&interrupted);
-    const std::string saved = out_dir + "/windows.csv";
+    host::WriteWindowsCsv(runs, dir);
     const bool repeatability = protocol_name == "repeatability";
     const std::vector<double> plan =
         repeatability
             ? std::vector<double>(static_cast<std::size_t>(trials), amplitude_deg)
             : amplitudes;
-    for (std::size_t t = 0; t < plan.size(); ++t) {
-      if (pause && t > 0) {
-        std::fprintf(stderr, "re-don, then press Enter for trial %zu/%zu\n", t + 1,
-                     plan.size());
-        std::string line;
-        std::getline(std::cin, line);
-        if (interrupted) {
-          throw Failure(Exit::kStopped, "interrupted before trial " +
-                                            std::to_string(t + 1) + " (node " +
-                                            std::to_string(node) +
-                                            " at rest); earlier trials are in " + saved);
+    host::RunRecord record;
+    record.command = "trial";
+    record.node = node;
+    record.iface = iface;
+    if (!subject.empty()) record.subject = subject;
+    record.protocol = protocol_name;
+    record.amplitudes_deg = plan;
+    record.frequency_hz = frequency_hz;
+    record.repetitions = reps;
+    record.rest_s = rest_s;
+    record.started_utc = host::UtcNow();
+    record.host = host::HostName();
+    record.mjc = build::kDescribe;
+    host::WriteRunRecord(record, dir);
+    // Every way out of here says how the run ended in run.json, then the Failure.
+    const auto end = [&](Exit exit, const std::string& what,
+                         std::optional<int> fault = std::nullopt) {
+      EndProgress();
+      record.end.outcome = OutcomeOf(exit);
+      record.end.message = what;
+      record.end.fault_code = fault;
+      host::WriteRunRecord(record, dir);
+      return Failure(exit, what);
+    };
+    try {
+      auto link = OpenLink(iface);
+      // Heartbeats flow while a trial runs: if this tool dies, the board stops it. The
+      // --pause prompt waits with the board at rest, where their absence is harmless.
+      host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
+                              host::HostHeartbeats::kSend);
+      SayBusOff(board, "mjc trial", iface);
+      // Ctrl-C (or SIGTERM, SIGHUP) ends the waits: the motion is stopped and every
+      // window that arrived is kept.
+      const std::atomic<bool>& interrupted = StopOnSignals();
+      board.SetInterrupt(&interrupted);
+      // Who it is (one board, its build) and the calibration it runs on, in run.json
+      // before anything moves.
+      IdentifyOrThrow(board);
+      record.board = board.info();
+      std::string why;
+      const auto held = host::ReadCalibration(board, &why);
+      if (!held) throw Failure(NoAnswer(board), "cannot read its calibration: " + why);
+      record.calibration = *held;
+      host::WriteRunRecord(record, dir);
+      for (std::size_t t = 0; t < plan.size(); ++t) {
+        if (pause && t > 0) {
+          std::fprintf(stderr, "re-don, then press Enter for trial %zu/%zu\n", t + 1,
+                       plan.size());
+          std::string line;
+          const bool answered = static_cast<bool>(std::getline(std::cin, line));
+          if (interrupted || !answered) {
+            throw end(Exit::kStopped,
+                      std::string(interrupted ? "interrupted"
+                                              : "no answer at the prompt (standard "
+                                                "input closed)") +
+                          " before trial " + std::to_string(t + 1) + " (node " +
+                          std::to_string(node) + " at rest); earlier trials are in " +
+                          saved);
+          }
         }
-      }
-      protocol::TrialConfig config;
-      config.amplitude = Angle::Quantize(host::DegToRad(plan[t]));
-      config.frequency_mHz = static_cast<std::uint16_t>(std::lround(frequency_hz * 1000));
-      config.repetitions = static_cast<std::uint8_t>(reps);
-      config.rest_100ms = static_cast<std::uint8_t>(std::lround(rest_s * 10));
-      const std::uint64_t broken_before = board.incomplete_windows();
-      const auto trial =
-          host::RunBoardTrial(board, config, [&](const host::BoardWindow& w) {
-            std::fprintf(stderr, "\r[trial %zu/%zu, %.0f°] repetition %u/%d %s   ", t + 1,
-                         plan.size(), plan[t], w.repetition + 1, reps,
-                         w.motion == Motion::kFlexion ? "flexion" : "extension");
-          });
-      std::fputc('\n', stderr);
-      if (!trial.completed) {
-        // The motor first: a file can wait, a finger should not.
-        const std::string stopped =
-            trial.end == host::TrialEnd::kInterrupted ? StopMotion(board) : "";
-        // What arrived is kept, the interrupted trial's windows included.
-        if (!trial.windows.empty()) {
-          runs.push_back({plan[t], static_cast<std::uint16_t>(reps), trial.windows});
-          host::WriteWindowsCsv(runs, out_dir);
+        protocol::TrialConfig config;
+        config.amplitude = Angle::Quantize(host::DegToRad(plan[t]));
+        config.frequency_mHz =
+            static_cast<std::uint16_t>(std::lround(frequency_hz * 1000));
+        config.repetitions = static_cast<std::uint8_t>(reps);
+        config.rest_100ms = static_cast<std::uint8_t>(std::lround(rest_s * 10));
+        const std::uint64_t broken_before = board.incomplete_windows();
+        char label[64];
+        std::snprintf(label, sizeof label, "[trial %zu/%zu, %.0f°]", t + 1, plan.size(),
+                      plan[t]);
+        const auto trial =
+            host::RunBoardTrial(board, config, [&](const host::BoardWindow& w) {
+              Progress(std::string(label) + " repetition " +
+                       std::to_string(w.repetition + 1) + "/" + std::to_string(reps) +
+                       (w.motion == Motion::kFlexion ? " flexion" : " extension"));
+            });
+        EndProgress();
+        if (!trial.completed) {
+          // The motor first: a file can wait, a finger should not. Two boards answering
+          // for the node may both be moving: both are told.
+          const bool stop = trial.end == host::TrialEnd::kInterrupted ||
+                            trial.end == host::TrialEnd::kAmbiguous;
+          const std::string stopped = stop ? StopMotion(board) : "";
+          // What arrived is kept, the interrupted trial's windows included.
+          if (!trial.windows.empty()) {
+            runs.push_back({plan[t], static_cast<std::uint16_t>(reps), trial.windows});
+            host::WriteWindowsCsv(runs, dir);
+          }
+          std::size_t windows = 0;
+          for (const host::TrialWindows& r : runs) windows += r.windows.size();
+          const std::string kept = std::to_string(windows) + " windows saved to " + saved;
+          if (trial.end == host::TrialEnd::kInterrupted) {
+            throw end(Exit::kStopped, "interrupted: " + stopped + "; " + kept);
+          }
+          std::optional<int> fault;
+          if (trial.end == host::TrialEnd::kFaulted) {
+            fault = static_cast<int>(board.status().fault);
+          }
+          const Exit exit = ExitOf(trial.end);
+          Failure failure =
+              end(exit,
+                  "trial " + std::to_string(t + 1) + "/" + std::to_string(plan.size()) +
+                      " on node " + std::to_string(node) + ": " + trial.error +
+                      (stopped.empty() ? "" : " (" + stopped + ")") + "; " + kept,
+                  fault);
+          // Stopped by another tool ends a run as "stopped", not "interrupted".
+          if (trial.end == host::TrialEnd::kStopped) {
+            record.end.outcome = "stopped";
+            host::WriteRunRecord(record, dir);
+          }
+          throw failure;
         }
-        std::size_t windows = 0;
-        for (const host::TrialWindows& r : runs) windows += r.windows.size();
-        const std::string kept = std::to_string(windows) + " windows saved to " + saved;
-        if (trial.end == host::TrialEnd::kInterrupted) {
-          throw Failure(Exit::kStopped, "interrupted: " + stopped + "; " + kept);
+        // A flexion and an extension window a repetition: fewer means some were lost
+        // on the bus (the tables then use those that arrived).
+        const auto expected = 2 * static_cast<std::size_t>(reps);
+        if (trial.windows.size() != expected) {
+          std::fprintf(
+              stderr,
+              "mjc trial: trial %zu: %zu of %zu windows arrived (%llu lost a part "
+              "on the bus)\n",
+              t + 1, trial.windows.size(), expected,
+              static_cast<unsigned long long>(board.incomplete_windows() -
+                                              broken_before));
         }
-        throw Failure(ExitOf(trial.end), "node " + std::to_string(node) + ", trial " +
-                                             std::to_string(t + 1) + ": " + trial.error +
-                                             "; " + kept);
+        runs.push_back({plan[t], static_cast<std::uint16_t>(reps), trial.windows});
+        host::WriteWindowsCsv(runs, dir);
       }
-      // A flexion and an extension window a repetition: fewer means some were lost on
-      // the bus (the tables then use those that arrived).
-      const auto expected = 2 * static_cast<std::size_t>(reps);
-      if (trial.windows.size() != expected) {
-        std::fprintf(
-            stderr,
-            "mjc trial: trial %zu: %zu of %zu windows arrived (%llu lost a part "
-            "on the bus)\n",
-            t + 1, trial.windows.size(), expected,
-            static_cast<unsigned long long>(board.incomplete_windows() - broken_before));
-      }
-      runs.push_back({plan[t], static_cast<std::uint16_t>(reps), trial.windows});
-      host::WriteWindowsCsv(runs, out_dir);
+    } catch (const Failure& f) {
+      if (record.end.outcome == "running") throw end(f.exit(), f.what());
+      throw;
+    } catch (const std::exception& e) {
+      throw end(Exit::kFailure, e.what());
     }
+    record.end.outcome = "completed";
+    host::WriteRunRecord(record, dir);
     std::fputs(host::TrialTables(runs, repeatability).c_str(), stdout);
-    std::printf("windows: %s/windows.csv\n", out_dir.c_str());
+    std::printf("windows: %s\nrun: %s\n", saved.c_str(), (dir / "run.json").c_str());
     std::string why;
     if (!figure) return;
-    if (!host::PlotTrials(out_dir, repeatability, &why)) {
+    if (!host::PlotTrials(dir, repeatability, host::RunTitle(record), &why)) {
       throw Failure("no figure: " + why + " (the tables and windows.csv are saved)");
     }
-    std::printf("figure: %s/eta.png\n", out_dir.c_str());
+    std::printf("figure: %s\n", (dir / "eta.png").c_str());
   });
 }
 

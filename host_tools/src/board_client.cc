@@ -2,13 +2,80 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <optional>
 #include <random>
 #include <utility>
 
+#include "mjc/host/describe.h"
+
 namespace mjc::host {
 
 using namespace mjc::protocol;
+
+void BoardIdentity::OnInfo(const BoardInfo& info) {
+  info_since_heartbeat_ = true;
+  const std::uint16_t id = info.instance;
+  if (std::find(instances_.begin(), instances_.end(), id) == instances_.end()) {
+    instances_.push_back(id);
+  }
+  if (!current_) {
+    current_ = id;
+  } else if (id != *current_) {
+    // One that restarted into another instance and speaks again, or a second new one
+    // before the first was judged: two boards.
+    if (std::find(retired_.begin(), retired_.end(), id) != retired_.end() ||
+        (new_ && *new_ != id)) {
+      ambiguous_ = true;
+    }
+    new_ = id;
+  }
+  info_ = info;
+}
+
+void BoardIdentity::OnHeartbeat(std::uint32_t tick) {
+  // A board's clock only runs forwards, except across a restart, which it opens with a
+  // BoardInfo (sent at its first poll, before its first heartbeat).
+  const bool reversed = heartbeats_ > 0 && static_cast<std::int32_t>(tick - tick_) < 0;
+  if (new_) {
+    // A new instance is a restart when its clock starts anew right after it.
+    if (reversed && tick < protocol::kBoardTickHz) {
+      retired_.push_back(*current_);
+      current_ = new_;
+    } else {
+      ambiguous_ = true;
+    }
+    new_.reset();
+  } else if (reversed && !info_since_heartbeat_ && ++clock_reversals_ >= 2) {
+    ambiguous_ = true;  // one may be an older image's restart, not two
+  }
+  info_since_heartbeat_ = false;
+  const std::uint32_t step = tick - tick_;
+  if (heartbeats_ > 0 && !reversed && step <= 2 * protocol::kBoardTickHz)
+    elapsed_ += step;
+  ++heartbeats_;
+  tick_ = tick;
+}
+
+std::string BoardIdentity::Message(int node) const {
+  if (!ambiguous_) return "";
+  std::string who;
+  if (instances_.size() >= 2) {
+    who = "instances ";
+    char hex[8];
+    for (std::size_t i = 0; i < instances_.size(); ++i) {
+      std::snprintf(hex, sizeof hex, "%04x", instances_[i]);
+      who += (i == 0                       ? ""
+              : i + 1 == instances_.size() ? " and "
+                                           : ", ") +
+             std::string(hex);
+    }
+  } else {
+    who = "their heartbeat clocks interleave";
+  }
+  return "node " + std::to_string(node) + " is answered by two boards (" + who +
+         "): give each its own node id";
+}
 
 BoardClient::BoardClient(CanLink* link, std::uint8_t node, HostHeartbeats heartbeats,
                          Clock now)
@@ -46,12 +113,14 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
   const auto board_ticks =
       static_cast<std::uint64_t>(patience.board.count()) * protocol::kBoardTickHz / 1000u;
   for (;;) {
+    if (ambiguous()) return end_with(WaitEnd::kAmbiguous, AmbiguityMessage());
     if (done()) return true;
     if (interrupted()) return end_with(WaitEnd::kInterrupted, "interrupted");
     if (!Poll(20, why)) {
       *end = WaitEnd::kLinkFailed;
       return false;
     }
+    if (ambiguous()) return end_with(WaitEnd::kAmbiguous, AmbiguityMessage());
     if (done()) return true;
     const auto now = now_();
     if (frames_ != frames_seen) {
@@ -69,9 +138,7 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
       }
     }
     if (now - heard_at > patience.silence) {
-      return end_with(WaitEnd::kSilent,
-                      "node " + std::to_string(node_) + " sent nothing for " +
-                          std::to_string(patience.silence.count()) + " ms");
+      return end_with(WaitEnd::kSilent, SilentNode(node_, link_->Name()));
     }
     // Talking without a heartbeat: its clock cannot be read, so the board time bound
     // could never end the wait. Far longer than any heartbeat gap of a board that sends
@@ -85,6 +152,17 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
   }
 }
 
+bool BoardClient::Identify(WaitEnd* end, std::string* why,
+                           std::chrono::milliseconds silence) {
+  // Counted from the first heartbeat this wait sees, in the board's ticks.
+  constexpr auto kTicks = static_cast<std::uint32_t>(kBoardInfoPeriod.count() * 11 / 10 *
+                                                     protocol::kBoardTickHz / 1000);
+  const std::uint64_t start = identity_.elapsed_ticks();
+  const auto shown = [&] { return identity_.elapsed_ticks() - start >= kTicks; };
+  // The board time bound is the condition itself.
+  return Await(shown, Patience{std::chrono::milliseconds{0}, silence}, end, why);
+}
+
 std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int timeout_ms,
                                                        std::string* why) {
   const std::uint8_t seq = ++sequence_;
@@ -96,9 +174,10 @@ std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int tim
   const std::chrono::milliseconds timeout{timeout_ms};
   WaitEnd end{};
   if (Await(answered, {timeout, timeout}, &end, why)) return last_result_->outcome;
-  if (end == WaitEnd::kSilent || end == WaitEnd::kBoardTime) {
-    *why = "node " + std::to_string(node_) + " did not answer the command within " +
-           std::to_string(timeout_ms) + " ms";
+  if (end == WaitEnd::kBoardTime) {
+    *why = "node " + std::to_string(node_) +
+           " talks but did not answer the command within " + std::to_string(timeout_ms) +
+           " ms of its own time";
   }
   return std::nullopt;
 }
@@ -111,10 +190,10 @@ std::optional<std::int32_t> BoardClient::ReadParam(ParamId id, int timeout_ms,
   const std::chrono::milliseconds timeout{timeout_ms};
   WaitEnd end{};
   if (!Await(answered, {timeout, timeout}, &end, why)) {
-    if (end == WaitEnd::kSilent || end == WaitEnd::kBoardTime) {
+    if (end == WaitEnd::kBoardTime) {
       *why = "node " + std::to_string(node_) +
-             " did not answer a parameter read within " + std::to_string(timeout_ms) +
-             " ms";
+             " talks but did not answer a parameter read within " +
+             std::to_string(timeout_ms) + " ms of its own time";
     }
     return std::nullopt;
   }
@@ -218,9 +297,15 @@ void BoardClient::Handle(const CanFrame& f) {
       if (ok(Decode(f, &v))) last_param_ = v;
       return;
     }
+    case Function::kBoardInfo: {
+      BoardInfo info;
+      if (ok(Decode(f, &info))) identity_.OnInfo(info);
+      return;
+    }
     case Function::kHeartbeat: {
       Heartbeat h;
       if (!ok(Decode(f, &h))) return;
+      identity_.OnHeartbeat(h.tick);
       ++heartbeats_heard_;
       status_.heard = true;
       status_.state = h.state;

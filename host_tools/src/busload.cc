@@ -32,7 +32,8 @@ constexpr double kHostHeartbeatHz = 1000.0 / kHostHeartbeatPeriod.count();
 
 }  // namespace
 
-BusLoad ComputeBusLoad(const app::CanNodeConfig& r, int boards, const BusTiming& t) {
+BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards,
+                       const BusTiming& t) {
   BusLoad load;
   auto add = [&]<class M>(M, double hz, const char* suffix = "") {
     const int bytes = Message<M>::kLength;
@@ -57,7 +58,7 @@ BusLoad ComputeBusLoad(const app::CanNodeConfig& r, int boards, const BusTiming&
   return load;
 }
 
-double MaxTelemetryHz(app::CanNodeConfig rates, int boards, const BusTiming& timing,
+double MaxTelemetryHz(protocol::TelemetryRates rates, int boards, const BusTiming& timing,
                       double budget) {
   rates.angles_hz = 0;
   const double rest = ComputeBusLoad(rates, boards, timing).total_fraction;
@@ -95,7 +96,7 @@ std::string FormatBusLoad(const BusLoad& load, const BusTiming& t, int boards) {
 }
 
 std::string BusLoadReport(int boards, double nominal_bps, double data_bps) {
-  const app::CanNodeConfig defaults;
+  const protocol::TelemetryRates defaults;
   const BusTiming fd{true, nominal_bps, data_bps};
   const BusTiming classic{false, nominal_bps, nominal_bps};
   std::string out = FormatBusLoad(ComputeBusLoad(defaults, boards, fd), fd, boards);

@@ -2,15 +2,26 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <utility>
 
 #include "mjc/host/can_link.h"
 #include "mjc/host/describe.h"
 #include "mjc/host/units.h"
 #include "mjc/protocol/can_frame.h"
 #include "mjc/protocol/messages.h"
+#include "mjc/strict_json.h"
 
 namespace mjc::host {
+namespace {
+
+// What a Maestro joint plausibly has (see CalibrationFromJson).
+constexpr double kPlausibleOffsetDeg = 10;
+constexpr double kPlausibleAlpha[2] = {0.5, 2.0};
+constexpr double kPlausibleStiffness[2] = {0.063, 6.3};
+
+}  // namespace
 
 nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& r) {
   return {{"c_right_deg", RadToDeg(r.backlash.c_right.ToDouble())},
@@ -23,9 +34,17 @@ nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& r) {
           {"fitted_at_unix_s", r.fitted_at_unix_s}};
 }
 
-std::optional<protocol::CalibrationRecord> CalibrationFromJson(const nlohmann::json& j,
-                                                               std::string* why) {
+std::optional<protocol::CalibrationRecord> CalibrationFromJson(
+    const nlohmann::json& j, std::string* why, std::vector<std::string>* warnings) {
   protocol::CalibrationRecord r;
+  if (!j.is_object()) {
+    *why = "calibration: the top level must be an object";
+    return std::nullopt;
+  }
+  if (const auto unknown = strict::UnknownKey(j, kCalibrationKeys)) {
+    *why = "calibration: " + *unknown;
+    return std::nullopt;
+  }
   auto number = [&](const char* key, double* out) {
     if (!j.contains(key) || !j[key].is_number()) {
       *why = std::string("calibration: field '") + key + "' missing or not a number";
@@ -78,6 +97,40 @@ std::optional<protocol::CalibrationRecord> CalibrationFromJson(const nlohmann::j
   if (result != protocol::CalibrationResult::kAccepted) {
     *why = "calibration refused: " + DescribeCalibrationResult(result, detail);
     return std::nullopt;
+  }
+  // What the board accepts is wider than what a Maestro joint has: said, not refused,
+  // since another robot may differ, but a unit slip (radians typed as degrees, a
+  // stiffness in N/m) shows here before it reaches a finger.
+  if (warnings != nullptr) {
+    char line[320];
+    for (const auto& [key, value] :
+         {std::pair{"c_right_deg", c_right}, std::pair{"c_left_deg", c_left}}) {
+      if (std::abs(value) > kPlausibleOffsetDeg) {
+        std::snprintf(line, sizeof line,
+                      "calibration: %s = %g° is beyond the plausible ±%g°: the Bowden "
+                      "cable's slack is a few degrees (the paper's joint: +1.1°/-0.9°); "
+                      "radians written as degrees? (the board accepts up to ±28.6°)",
+                      key, value, kPlausibleOffsetDeg);
+        warnings->push_back(line);
+      }
+    }
+    if (alpha < kPlausibleAlpha[0] || alpha > kPlausibleAlpha[1]) {
+      std::snprintf(line, sizeof line,
+                    "calibration: alpha = %g is outside the plausible [%g, %g]: the "
+                    "backlash's slope is 1 for a cable of equal sides (the board "
+                    "accepts (1/8, 8))",
+                    alpha, kPlausibleAlpha[0], kPlausibleAlpha[1]);
+      warnings->push_back(line);
+    }
+    if (stiffness < kPlausibleStiffness[0] || stiffness > kPlausibleStiffness[1]) {
+      std::snprintf(line, sizeof line,
+                    "calibration: sea_stiffness_Nm_per_rad = %g is outside the plausible "
+                    "[%g, %g] N·m/rad, a decade either side of the Maestro SEA's 0.63 "
+                    "(2·3150 N/m·(10 mm)²); N/m instead of N·m/rad? (the board accepts "
+                    "(0, 100])",
+                    stiffness, kPlausibleStiffness[0], kPlausibleStiffness[1]);
+      warnings->push_back(line);
+    }
   }
   return checked;
 }

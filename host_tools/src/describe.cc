@@ -1,5 +1,7 @@
 #include "mjc/host/describe.h"
 
+#include <cstdio>
+
 namespace mjc::host {
 
 std::string_view FaultName(Fault fault) {
@@ -60,6 +62,53 @@ std::string_view OutcomeName(protocol::CommandOutcomeCode outcome) {
       return "an earlier request is still being applied";
   }
   return "unknown outcome";
+}
+
+std::string_view StateName(protocol::BoardState state) {
+  switch (state) {
+    case protocol::BoardState::kIdle:
+      return "idle";
+    case protocol::BoardState::kCalibrating:
+      return "calibrating";
+    case protocol::BoardState::kRunning:
+      return "running";
+    case protocol::BoardState::kFault:
+      return "FAULT";
+  }
+  return "?";
+}
+
+std::string_view ImageName(protocol::ImageKind image) {
+  return image == protocol::ImageKind::kBootloader ? "bootloader" : "application";
+}
+
+std::string_view ResetCauseName(protocol::ResetCause cause) {
+  switch (cause) {
+    case protocol::ResetCause::kPowerOn:
+      return "power-on";
+    case protocol::ResetCause::kPin:
+      return "reset pin";
+    case protocol::ResetCause::kSoftware:
+      return "software";
+    case protocol::ResetCause::kWatchdog:
+      return "watchdog";
+    case protocol::ResetCause::kOther:
+      return "other";
+    case protocol::ResetCause::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
+std::string BuildName(std::uint32_t commit, bool dirty) {
+  char hex[16];
+  std::snprintf(hex, sizeof hex, "%08x", commit);
+  return std::string(hex) + (dirty ? "+dirty" : "");
+}
+
+std::string SilentNode(int node, std::string_view iface) {
+  return "node " + std::to_string(node) + " is silent (is the board powered and on " +
+         std::string(iface) + "? try mjc list)";
 }
 
 std::string DescribeCalibrationResult(protocol::CalibrationResult result,

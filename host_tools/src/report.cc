@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <stdexcept>
 
 namespace mjc::host {
@@ -90,17 +91,30 @@ bool RunGnuplot(const std::filesystem::path& script, std::string* why) {
     *why = "gnuplot is not installed (apt-get install gnuplot-nox)";
     return false;
   }
-  // stdout is the tool's report: gnuplot's chatter goes to stderr.
+  // Everything gnuplot says (its warnings too: a font it substitutes, an empty range)
+  // goes to a log beside the script, shown only when it fails: a figure that was drawn
+  // needs no chatter on the terminal.
+  std::filesystem::path log = script;
+  log += ".log";
   const std::string command = "cd '" + script.parent_path().string() + "' && gnuplot '" +
-                              script.filename().string() + "' 1>&2";
+                              script.filename().string() + "' >'" +
+                              log.filename().string() + "' 2>&1";
   const int status = std::system(command.c_str());
   if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::string said;
+    std::ifstream in(log);
+    for (std::string line; std::getline(in, line);) {
+      if (line.find_first_not_of(" \t^") != std::string::npos) said = line;
+    }
     *why = "gnuplot failed on " + script.string() +
            (status != -1 && WIFEXITED(status)
                 ? " (exit " + std::to_string(WEXITSTATUS(status)) + ")"
-                : std::string(" (did not run to completion)"));
+                : std::string(" (did not run to completion)")) +
+           (said.empty() ? "" : ": " + said) + "; all it said is in " + log.string();
     return false;
   }
+  std::error_code ignored;
+  std::filesystem::remove(log, ignored);
   return true;
 }
 

@@ -11,11 +11,21 @@
 namespace mjc::host {
 namespace {
 
-// windows.csv's columns, in order; ReadWindowsCsv accepts exactly this header.
-const std::vector<std::string> kColumns = {
+// windows.csv's columns, in order: version 1 (no note line above the header) counted
+// repetitions from 0 and had no repetitions or analysed column; version 2 counts trials
+// and repetitions from 1, as every table and progress line does.
+const std::vector<std::string> kColumnsV1 = {
     "trial",      "amplitude_deg", "motion",        "repetition", "eta_valid",
     "eta_pct",    "loading_J",     "unloading_J",   "net_J",      "positive_J",
     "negative_J", "peak_power_W",  "peak_torque_Nm"};
+const std::vector<std::string> kColumns = {
+    "trial",    "amplitude_deg", "repetitions", "motion",       "repetition",
+    "analysed", "eta_valid",     "eta_pct",     "loading_J",    "unloading_J",
+    "net_J",    "positive_J",    "negative_J",  "peak_power_W", "peak_torque_Nm"};
+constexpr const char* kNote =
+    "# mjc windows.csv version 2: trial and repetition count from 1; analysed = 1 for "
+    "the middle three flexions the tables use (version 1, without this line, counted "
+    "repetitions from 0)";
 
 std::string Joined(const std::vector<std::string>& cells) {
   std::string out;
@@ -74,9 +84,26 @@ std::string TrialTables(const std::vector<TrialWindows>& trials, bool repeatabil
     }
     out += line;
   }
+  // What the numbers are: the middle three flexions, as repetitions counted from 1.
+  std::string which = "the middle three flexions";
+  if (!trials.empty() && std::all_of(trials.begin(), trials.end(), [&](const auto& t) {
+        return t.repetitions == trials.front().repetitions;
+      })) {
+    const RepetitionRange keep = MiddleRepetitions(trials.front().repetitions, 3);
+    std::snprintf(line, sizeof line, " (repetitions %d-%d of %d)", keep.first + 1,
+                  keep.first + keep.count, trials.front().repetitions);
+    which += line;
+  }
+  out += repeatability
+             ? "\nη mean and η std: the mean and the sample standard deviation (n − 1) "
+               "of η over each trial's " +
+                   which + "; overall: over every trial's analysed flexions together.\n"
+             : "\nEach energy: mean ± standard error of the mean (sample standard "
+               "deviation / √n) over " +
+                   which + " at that amplitude; η: their mean.\n";
   if (skipped > 0) {
     std::snprintf(line, sizeof line,
-                  "\nη leaves out %d analysed window(s) the board marked invalid.\n",
+                  "η leaves out %d analysed window(s) the board marked invalid.\n",
                   skipped);
     out += line;
   }
@@ -91,23 +118,28 @@ bool SameAmplitude(const std::vector<TrialWindows>& trials) {
 
 void WriteWindowsCsv(const std::vector<TrialWindows>& trials,
                      const std::filesystem::path& dir) {
-  CsvTable csv(kColumns);
+  std::string text = std::string(kNote) + "\n" + Joined(kColumns) + "\n";
   for (std::size_t t = 0; t < trials.size(); ++t) {
+    const RepetitionRange keep = MiddleRepetitions(trials[t].repetitions, 3);
     for (const BoardWindow& w : trials[t].windows) {
-      csv.AddRow({std::to_string(t + 1), CsvTable::Number(trials[t].amplitude_deg),
-                  w.motion == Motion::kFlexion ? "flexion" : "extension",
-                  std::to_string(w.repetition), w.eta_valid ? "1" : "0",
-                  CsvTable::Number(w.eta_percent), CsvTable::Number(w.loading_J),
-                  CsvTable::Number(w.unloading_J), CsvTable::Number(w.net_J()),
-                  CsvTable::Number(w.positive_J), CsvTable::Number(w.negative_J),
-                  CsvTable::Number(w.peak_power_W), CsvTable::Number(w.peak_torque_Nm)});
+      const bool analysed = w.motion == Motion::kFlexion && keep.Contains(w.repetition);
+      text += Joined({std::to_string(t + 1), CsvTable::Number(trials[t].amplitude_deg),
+                      std::to_string(trials[t].repetitions),
+                      w.motion == Motion::kFlexion ? "flexion" : "extension",
+                      std::to_string(w.repetition + 1), analysed ? "1" : "0",
+                      w.eta_valid ? "1" : "0", CsvTable::Number(w.eta_percent),
+                      CsvTable::Number(w.loading_J), CsvTable::Number(w.unloading_J),
+                      CsvTable::Number(w.net_J()), CsvTable::Number(w.positive_J),
+                      CsvTable::Number(w.negative_J), CsvTable::Number(w.peak_power_W),
+                      CsvTable::Number(w.peak_torque_Nm)}) +
+              "\n";
     }
   }
-  csv.Write(dir / "windows.csv");
+  WriteFile(dir / "windows.csv", text);
 }
 
 std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::path& dir,
-                                                        std::string* why) {
+                                                        std::string* why, int* version) {
   const std::filesystem::path path = dir / "windows.csv";
   std::ifstream in(path);
   if (!in) {
@@ -116,42 +148,72 @@ std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::p
   }
   std::string line;
   std::getline(in, line);
-  if (line != Joined(kColumns)) {
-    *why = path.string() + ": the header is not '" + Joined(kColumns) +
+  int number = 1;
+  const bool v2 = line.starts_with("# mjc windows.csv version 2");
+  if (v2) {
+    std::getline(in, line);
+    ++number;
+  }
+  const std::vector<std::string>& columns = v2 ? kColumns : kColumnsV1;
+  if (line != Joined(columns)) {
+    *why = path.string() + ": the header is not '" + Joined(columns) +
            "' (written by another version of mjc trial?)";
     return std::nullopt;
   }
+  if (version != nullptr) *version = v2 ? 2 : 1;
+  // Version 1's cells in version 2's places (no repetitions or analysed column).
+  const std::vector<int> at =
+      v2 ? std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14}
+         : std::vector<int>{0, 1, -1, 2, 3, -1, 4, 5, 6, 7, 9, 10, 11, 12};
   std::vector<TrialWindows> trials;
-  int number = 1;
+  std::vector<bool> planned;  // the file gave the trial's repetitions
   while (std::getline(in, line)) {
     ++number;
     std::vector<std::string> cell;
     std::stringstream row(line);
     for (std::string c; std::getline(row, c, ',');) cell.push_back(c);
     try {
-      if (cell.size() != kColumns.size()) throw std::invalid_argument("cells");
-      if (cell[2] != "flexion" && cell[2] != "extension")
+      if (cell.size() != columns.size()) throw std::invalid_argument("cells");
+      const auto get = [&](int i) -> const std::string& {
+        return cell[static_cast<std::size_t>(at[static_cast<std::size_t>(i)])];
+      };
+      if (get(3) != "flexion" && get(3) != "extension")
         throw std::invalid_argument("motion");
-      if (cell[4] != "0" && cell[4] != "1") throw std::invalid_argument("eta_valid");
-      const auto t = static_cast<std::size_t>(std::stoul(cell[0]));
-      const unsigned long repetition = std::stoul(cell[3]);
+      if (get(6) != "0" && get(6) != "1") throw std::invalid_argument("eta_valid");
+      const auto t = static_cast<std::size_t>(std::stoul(get(0)));
+      // Counted from 1 in version 2, from 0 in version 1; kept from 0 here, as the
+      // board counts.
+      const unsigned long counted = std::stoul(get(4));
+      if (v2 && counted == 0) throw std::out_of_range("repetition");
+      const unsigned long repetition = v2 ? counted - 1 : counted;
       if (t == 0 || t > 10000 || repetition > 0xFFFE) throw std::out_of_range("range");
-      if (trials.size() < t) trials.resize(t);
+      if (trials.size() < t) {
+        trials.resize(t);
+        planned.resize(t, false);
+      }
       TrialWindows& tw = trials[t - 1];
-      tw.amplitude_deg = std::stod(cell[1]);
+      tw.amplitude_deg = std::stod(get(1));
       BoardWindow w;
-      w.motion = cell[2] == "flexion" ? Motion::kFlexion : Motion::kExtension;
+      w.motion = get(3) == "flexion" ? Motion::kFlexion : Motion::kExtension;
       w.repetition = static_cast<std::uint16_t>(repetition);
-      w.eta_valid = cell[4] == "1";
-      w.eta_percent = std::stod(cell[5]);
-      w.loading_J = std::stod(cell[6]);
-      w.unloading_J = std::stod(cell[7]);
-      w.positive_J = std::stod(cell[9]);
-      w.negative_J = std::stod(cell[10]);
-      w.peak_power_W = std::stod(cell[11]);
-      w.peak_torque_Nm = std::stod(cell[12]);
-      tw.repetitions =
-          std::max(tw.repetitions, static_cast<std::uint16_t>(w.repetition + 1));
+      w.eta_valid = get(6) == "1";
+      w.eta_percent = std::stod(get(7));
+      w.loading_J = std::stod(get(8));
+      w.unloading_J = std::stod(get(9));
+      w.positive_J = std::stod(get(10));
+      w.negative_J = std::stod(get(11));
+      w.peak_power_W = std::stod(get(12));
+      w.peak_torque_Nm = std::stod(get(13));
+      if (v2) {
+        const unsigned long reps = std::stoul(get(2));
+        if (reps == 0 || reps > 255 || repetition >= reps)
+          throw std::out_of_range("reps");
+        tw.repetitions = static_cast<std::uint16_t>(reps);
+        planned[t - 1] = true;
+      } else {
+        tw.repetitions =
+            std::max(tw.repetitions, static_cast<std::uint16_t>(w.repetition + 1));
+      }
       tw.windows.push_back(w);
     } catch (const std::exception&) {
       *why = path.string() + ": line " + std::to_string(number) + " is malformed";
@@ -165,19 +227,31 @@ std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::p
   return trials;
 }
 
-bool PlotTrials(const std::filesystem::path& dir, bool repeatability, std::string* why) {
-  // Columns: 1 trial, 2 amplitude_deg, 3 motion, 5 eta_valid, 6 eta_pct.
+bool PlotTrials(const std::filesystem::path& dir, bool repeatability,
+                const std::string& title, std::string* why, const std::string& data) {
+  // Columns (version 2): 1 trial, 2 amplitude_deg, 4 motion, 6 analysed, 7 eta_valid,
+  // 8 eta_pct. Single quotes in the title would end gnuplot's string.
+  std::string quoted = title;
+  std::replace(quoted.begin(), quoted.end(), '\'', '"');
+  const std::string x = repeatability ? "1" : "2";
+  const std::string flexion = "(strcol(4) eq 'flexion' && $7 == 1 && $6 == ";
   const auto script = dir / "eta.gp";
   WriteFile(script, std::string("set terminal pngcairo size 900,600\n"
                                 "set output 'eta.png'\n"
                                 "set datafile separator ','\nset grid\n") +
-                        (repeatability ? "set xlabel 'trial'\n"
+                        "set title '" + quoted + "'\n" +
+                        (repeatability ? "set xlabel 'trial (number, from 1)'\n"
                                        : "set xlabel 'amplitude (°)'\n") +
                         "set ylabel 'energy loss η (%)'\n"
-                        "plot 'windows.csv' every ::1 using " +
-                        (repeatability ? "1" : "2") +
-                        ":(strcol(3) eq 'flexion' && $5 == 1 ? $6 : 1/0) "
-                        "with points pt 7 title 'flexion windows'\n");
+                        "set key outside top center horizontal\n"
+                        "plot '" +
+                        data + "' every ::1 using " + x + ":" + flexion +
+                        "1 ? $8 : 1/0) with points pt 7 ps 1.2 " +
+                        "title 'analysed flexions (the middle three of each trial)', \\\n"
+                        "     '" +
+                        data + "' every ::1 using " + x + ":" + flexion +
+                        "0 ? $8 : 1/0) with points pt 6 ps 1.0 " +
+                        "title 'other flexions'\n");
   return RunGnuplot(script, why);
 }
 

@@ -29,6 +29,7 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
   const auto outcome = board.Command(CommandCode::kStartTrial, kStartAnswerMs, &why);
   if (!outcome) {
     if (board.interrupted()) return fail(TrialEnd::kInterrupted, why);
+    if (board.ambiguous()) return fail(TrialEnd::kAmbiguous, why);
     return fail(board.link_failed() ? TrialEnd::kLinkFailed : TrialEnd::kNoAnswer, why);
   }
   if (*outcome != CommandOutcomeCode::kAccepted) {
@@ -69,9 +70,10 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
         return fail(TrialEnd::kLinkFailed, why);
       case WaitEnd::kInterrupted:
         return fail(TrialEnd::kInterrupted, why);
+      case WaitEnd::kAmbiguous:
+        return fail(TrialEnd::kAmbiguous, why);
       case WaitEnd::kSilent:
-        return fail(TrialEnd::kNoAnswer,
-                    "the board went silent during the trial (" + why + ")");
+        return fail(TrialEnd::kNoAnswer, "during the trial, " + why);
       case WaitEnd::kBoardTime:
         return fail(TrialEnd::kNoAnswer,
                     "the trial did not finish within twice its length (" + why + ")");

@@ -9,10 +9,23 @@
 #include <exception>
 #include <random>
 #include <string>
+#include <string_view>
 
 #include "commands.h"
 #include "mjc/g474board/virtual_board.h"
+#include "mjc/host/config.h"
 #include "mjc/plant/params.h"
+
+namespace mjc::cli {
+
+// mjc's defaults (its config file, MJC_IFACE), so that --iface and --node default as
+// mjc sim's do.
+host::ToolConfig& Defaults() {
+  static host::ToolConfig defaults;
+  return defaults;
+}
+
+}  // namespace mjc::cli
 
 namespace {
 
@@ -88,6 +101,20 @@ int main(int argc, char** argv) {
       "SIGUSR2. A bus-off error frame on the interface is taken as the board's own "
       "bus-off. Exit status: 0 done; 1 a model saw a rule of the manual broken, or a "
       "failure on this side (interface, files); 2 bad command line.");
+  std::string why;
+  if (const auto defaults = mjc::host::LoadToolConfig(&why)) {
+    mjc::cli::Defaults() = *defaults;
+  } else {
+    bool asks_help = false;
+    for (int i = 1; i < argc; ++i) {
+      const std::string_view a = argv[i];
+      asks_help = asks_help || a == "--help" || a == "-h";
+    }
+    if (!asks_help) {
+      std::fprintf(stderr, "mjc-g474: %s\n", why.c_str());
+      return static_cast<int>(Exit::kFailure);
+    }
+  }
   std::string iface, robot = "default", subject, flash_path;
   int node = 1;
   double seconds = 0, speed = 1;
@@ -107,6 +134,10 @@ int main(int argc, char** argv) {
                  "Simulated seconds per wall second (0: as fast as possible)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  // One line, as mjc's: "mjc-g474: --node: 0 is outside 1..8 (see mjc-g474 --help)".
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return std::string("mjc-g474: ") + e.what() + " (see mjc-g474 --help)\n";
+  });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -64,22 +64,22 @@ JSON
 check "node 1 takes a calibration with stiffness 0.65" \
   "$mjc" cal upload "$work/held.json" --iface vcan0 --node 1
 check "mjc calibrate: sweep, fit, upload over the bus" \
-  "$mjc" calibrate --iface vcan0 --node 1 --frequency-hz 2 --cycles 6 --out "$work/cal.json"
+  "$mjc" calibrate --iface vcan0 --node 1 --frequency-hz 2 --cycles 6 --out "$work/cal"
 # The plant's slack, from its parameter file; the fit is held to the product goal of
 # 0.05° (the simulated calibration tests hold it to the same).
 # (Here-strings, not process substitution: the VM has no /dev/fd.)
 want_r=$(awk -v r="$(json_number "$plant" c_right_rad)" 'BEGIN { print r * 45 / atan2(1, 1) }')
 want_l=$(awk -v r="$(json_number "$plant" c_left_rad)" 'BEGIN { print r * 45 / atan2(1, 1) }')
-r=$(json_number "$work/cal.json" c_right_deg)
-l=$(json_number "$work/cal.json" c_left_deg)
-stiffness=$(json_number "$work/cal.json" sea_stiffness_Nm_per_rad)
+r=$(json_number "$work/cal/calibration.json" c_right_deg)
+l=$(json_number "$work/cal/calibration.json" c_left_deg)
+stiffness=$(json_number "$work/cal/calibration.json" sea_stiffness_Nm_per_rad)
 echo "fitted c_r ${r:-?}°, c_l ${l:-?}° (plant ${want_r:-?}°, ${want_l:-?}°)"
 check "fitted offsets within 0.05° of the plant's" \
   awk -v r="${r:-}" -v l="${l:-}" -v R="${want_r:-}" -v L="${want_l:-}" \
   'BEGIN { exit !(r != "" && R != "" && (r - R)^2 < 0.05^2 && (l - L)^2 < 0.05^2) }'
 check "the calibration keeps the stiffness node 1 held" \
   awk -v k="${stiffness:-}" 'BEGIN { exit !(k != "" && (k - 0.65)^2 < 1e-12) }'
-check "mjc cal show reads the saved calibration" "$mjc" cal show "$work/cal.json"
+check "mjc cal show reads the saved calibration" "$mjc" cal show "$work/cal/calibration.json"
 # cansend a stop command (node 1, sequence 0x2A, no session): the board answers on 0x041.
 count_receivers
 base=$receivers
@@ -97,7 +97,7 @@ check "board 1 accounted for every frame (no malformed)" grep -q 'malformed 0' "
 sim2=$!
 check "board 2 comes up" wait_sim "$work/sim2.err" 2
 check "mjc cal upload calibrates node 2 with node 1's file" \
-  "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 2
+  "$mjc" cal upload "$work/cal/calibration.json" --iface vcan0 --node 2
 check "mjc cal download reads node 2's calibration back" \
   sh -c "'$mjc' cal download --iface vcan0 --node 2 --out '$work/back.json' && grep -q c_right_deg '$work/back.json' && ! grep -q fit_rms_urad '$work/back.json'"
 check "mjc trial runs the amplitude protocol on node 2" \
@@ -107,7 +107,7 @@ check "mjc report re-renders the trial's tables from windows.csv" \
   sh -c "'$mjc' report '$work/trial' --protocol amplitude --no-figure >'$work/report.out' && grep -q '15°' '$work/report.out' && test -s '$work/trial/report.md'"
 # The same trial again as trial 2 at 20°: two amplitudes, so the protocol is amplitude.
 mkdir -p "$work/two"
-{ cat "$work/trial/windows.csv"; tail -n +2 "$work/trial/windows.csv" | sed 's/^1,15,/2,20,/'; } \
+{ cat "$work/trial/windows.csv"; tail -n +3 "$work/trial/windows.csv" | sed 's/^1,15,/2,20,/'; } \
   >"$work/two/windows.csv"
 check "mjc report derives the amplitude protocol from windows.csv" \
   sh -c "'$mjc' report '$work/two' --no-figure >'$work/two.out' && grep -q '20°' '$work/two.out'"
@@ -121,7 +121,7 @@ check "  calibrated" grep -q 'node 2: idle *calibrated' "$work/monitor.out"
 kill -INT "$monitor"
 wait "$monitor"
 check "mjc monitor reports an absent node silent, exit 3" \
-  sh -c "'$mjc' monitor --iface vcan0 --node 6 --seconds 2.5 >'$work/silent.out' 2>'$work/silent.err'; test \$? -eq 3 && grep -q 'node 6: silent' '$work/silent.out' && grep -q 'silent node(s): 6' '$work/silent.err'"
+  sh -c "'$mjc' monitor --iface vcan0 --node 6 --seconds 2.5 >'$work/silent.out' 2>'$work/silent.err'; test \$? -eq 3 && grep -q 'node 6: no data yet' '$work/silent.out' && grep -q 'node 6 is silent (is the board powered and on vcan0? try mjc list)' '$work/silent.err'"
 check "every window of the trial reached the host (3 flexions, 3 extensions)" \
   sh -c "test \$(grep -c ',flexion,' '$work/trial/windows.csv') -eq 3 && test \$(grep -c ',extension,' '$work/trial/windows.csv') -eq 3"
 
@@ -162,8 +162,8 @@ check "  and the line names the command and the field" \
 check "a negative fit field is refused, not wrapped" \
   sh -c "sed 's/\"small\"/-5/' '$work/typed.json' >'$work/negative.json' && ! '$mjc' cal show '$work/negative.json' 2>/dev/null"
 check "an absent node is reported, exit 3" \
-  refuses 3 "$work/absent.err" "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 5 --timeout-ms 300
-check "  as not answering" grep -q 'did not answer' "$work/absent.err"
+  refuses 3 "$work/absent.err" "$mjc" cal upload "$work/cal/calibration.json" --iface vcan0 --node 5 --timeout-ms 300
+check "  in the one wording of an absent node" grep -q 'node 5 is silent (is the board powered and on vcan0? try mjc list)' "$work/absent.err"
 check "an unwritable trial folder is refused before the trial runs, exit 1" \
   refuses 1 "$work/noout.err" "$mjc" trial --iface vcan0 --node 2 --out /proc/mjc/trial
 mkdir -p "$work/broken"
@@ -182,7 +182,7 @@ check "a bad flag is reported, exit 2" sh -c "'$mjc' sim --node 9 2>/dev/null; t
 "$mjc" sim --iface vcan0 --node 3 --flash "$work/node3.flash" 2>"$work/sim3a.err" &
 sim3=$!
 wait_sim "$work/sim3a.err" 3
-check "node 3 stores an uploaded calibration" "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 3
+check "node 3 stores an uploaded calibration" "$mjc" cal upload "$work/cal/calibration.json" --iface vcan0 --node 3
 kill "$sim3"
 wait "$sim3" 2>/dev/null
 "$mjc" sim --iface vcan0 --node 3 --flash "$work/node3.flash" 2>"$work/sim3b.err" &

@@ -229,8 +229,9 @@ TEST(PlantParams, ErrorsNameTheFileAndTheField) {
   auto misspelt = nlohmann::ordered_json::parse(PlantParamsToJson(PlantParams{}));
   misspelt["cable"]["columb_Nm"] = 0.3;
   misspelt["cable"].erase("coulomb_Nm");
-  EXPECT_EQ(ErrorOf(misspelt.dump()),
-            "test.json: field 'cable.columb_Nm' is unknown (misspelt?)");
+  EXPECT_EQ(
+      ErrorOf(misspelt.dump()),
+      "test.json: unknown key 'cable.columb_Nm' (did you mean 'cable.coulomb_Nm'?)");
 
   EXPECT_EQ(ErrorOf("{\"name\": \"x\",").rfind("test.json: not valid JSON: ", 0), 0u);
   EXPECT_EQ(ErrorOf("[1, 2]"), "test.json: the top level must be an object");

@@ -51,23 +51,23 @@ void CanNode::SendTelemetry(const JointApp::Snapshot& last) {
   const Telemetry& t = last.telemetry;
   const std::uint32_t now = clock_.ticks();
   const std::uint32_t hz = tick_hz();
-  if (angles_.Due(now, config_.angles_hz, hz)) {
+  if (angles_.Due(now, config_.rates.angles_hz, hz)) {
     Send(protocol::TelemetryAngles{t.motor, t.joint});
   }
-  if (torque_.Due(now, config_.torque_hz, hz)) {
+  if (torque_.Due(now, config_.rates.torque_hz, hz)) {
     Send(protocol::TelemetryTorque{t.torque, t.cable_side});
   }
-  if (power_.Due(now, config_.power_hz, hz)) {
+  if (power_.Due(now, config_.rates.power_hz, hz)) {
     Send(protocol::TelemetryPower{t.power, t.joint_velocity});
   }
-  if (energy_.Due(now, config_.energy_hz, hz)) {
+  if (energy_.Due(now, config_.rates.energy_hz, hz)) {
     Send(protocol::TelemetryEnergy{EnergyScale(hz).ToEnergy(t.energy_sum)});
   }
-  if (control_.Due(now, config_.control_hz, hz)) {
+  if (control_.Due(now, config_.rates.control_hz, hz)) {
     Send(protocol::TelemetryControl{t.setpoint, t.duty, t.segment, last.state});
   }
-  if (info_.Due(now, config_.info_hz, hz)) Send(config_.identity);
-  if (heartbeat_.Due(now, config_.heartbeat_hz, hz)) {
+  if (info_.Due(now, config_.rates.info_hz, hz)) Send(config_.identity);
+  if (heartbeat_.Due(now, config_.rates.heartbeat_hz, hz)) {
     protocol::Heartbeat h;
     h.state = last.state;
     h.calibrated = last.calibrated;

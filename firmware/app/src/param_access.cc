@@ -14,22 +14,22 @@ constexpr bool VisitParam(ParamId id, CanNodeConfig& node, ControlConfig& contro
                           bool& calibrated, Visit&& visit) {
   switch (id) {
     case ParamId::kTelemetryAnglesHz:
-      visit(node.angles_hz);
+      visit(node.rates.angles_hz);
       return true;
     case ParamId::kTelemetryTorqueHz:
-      visit(node.torque_hz);
+      visit(node.rates.torque_hz);
       return true;
     case ParamId::kTelemetryPowerHz:
-      visit(node.power_hz);
+      visit(node.rates.power_hz);
       return true;
     case ParamId::kTelemetryEnergyHz:
-      visit(node.energy_hz);
+      visit(node.rates.energy_hz);
       return true;
     case ParamId::kTelemetryControlHz:
-      visit(node.control_hz);
+      visit(node.rates.control_hz);
       return true;
     case ParamId::kHeartbeatHz:
-      visit(node.heartbeat_hz);
+      visit(node.rates.heartbeat_hz);
       return true;
     case ParamId::kStreamTimeoutMs:
       visit(node.stream_timeout_ms);

@@ -5,7 +5,7 @@
 
 #include <concepts>
 
-#include "mjc/core/control_tick.h"
+#include "mjc/core/tick_io.h"
 
 namespace mjc::hal {
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "mjc/plant/plant.h"
+#include "mjc/strict_json.h"
 
 #ifndef MJC_PARAMS_DIR
 #error "MJC_PARAMS_DIR must name the directory of the parameter sets"
@@ -61,10 +62,9 @@ class Reader {
 
   void CheckKnown(const Json& object, const std::string& prefix,
                   std::span<const std::string_view> known) const {
-    for (const auto& item : object.items()) {
-      if (std::find(known.begin(), known.end(), item.key()) == known.end()) {
-        FieldError(source_, prefix + item.key(), "is unknown (misspelt?)");
-      }
+    // The policy of every loader (mjc/strict_json.h): named, with its nearest match.
+    if (const auto unknown = strict::UnknownKey(object, known, prefix)) {
+      throw std::runtime_error(std::string(source_) + ": " + *unknown);
     }
   }
 

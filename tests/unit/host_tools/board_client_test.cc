@@ -214,7 +214,8 @@ TEST_F(HostHeartbeatCadence, KeepsItsCadenceAcrossShortPolls) {
 TEST_F(HostHeartbeatCadence, FlowWhileACommandWaitsForItsAnswer) {
   // No answer: the command waits out its 1000 ms in 10 ms polls, heartbeats on time.
   EXPECT_FALSE(client_.Command(protocol::CommandCode::kStop, 1000, &why_));
-  EXPECT_NE(why_.find("did not answer"), std::string::npos) << why_;
+  EXPECT_NE(why_.find("node 1 is silent (is the board powered"), std::string::npos)
+      << why_;
   EXPECT_FALSE(client_.link_failed());
   const auto beats = Heartbeats();
   ASSERT_GE(beats.size(), 10u);
@@ -412,6 +413,144 @@ TEST(BoardClientBusOff, CountedWithoutAHandler) {
   std::string why;
   ASSERT_TRUE(client.Poll(0, &why)) << why;
   EXPECT_EQ(client.bus_off(), 1u);
+}
+
+// ---------------------------------------------------------------------------------
+// Two boards with one node id: told apart by their BoardInfo instances and by their
+// heartbeat clocks, against scripted frames; a restart is not a second board.
+
+class TwoBoards : public ::testing::Test {
+ protected:
+  void Info(std::uint16_t instance) {
+    protocol::BoardInfo info;
+    info.build = 0x1958ba84;
+    info.instance = instance;
+    ASSERT_TRUE(board_->Send(protocol::Encode(info, kNode), &why_));
+  }
+  void Beat(std::uint32_t tick) {
+    protocol::Heartbeat h;
+    h.tick = tick;
+    ASSERT_TRUE(board_->Send(protocol::Encode(h, kNode), &why_));
+  }
+  bool Ambiguous() {
+    EXPECT_TRUE(client_.Poll(50, &why_)) << why_;
+    return client_.ambiguous();
+  }
+
+  std::shared_ptr<InProcessBus> bus_ = InProcessBus::Create();
+  std::unique_ptr<CanLink> board_ = bus_->Connect();
+  std::unique_ptr<CanLink> host_ = bus_->Connect();
+  BoardClient client_{host_.get(), kNode};
+  std::string why_;
+};
+
+TEST_F(TwoBoards, OneBoardIsOneBoard) {
+  Info(0x3f2a);
+  for (std::uint32_t t = 50000; t < 70000; t += 1000) Beat(t);
+  Info(0x3f2a);
+  Beat(70000);
+  EXPECT_FALSE(Ambiguous());
+  ASSERT_TRUE(client_.info());
+  EXPECT_EQ(client_.info()->instance, 0x3f2a);
+  EXPECT_EQ(client_.info()->build, 0x1958ba84u);
+  EXPECT_EQ(client_.AmbiguityMessage(), "");
+}
+
+TEST_F(TwoBoards, TwoInstancesWhileNeitherRestartedAreTwoBoards) {
+  // Started together: their clocks agree, only their BoardInfo tells them apart.
+  Info(0x3f2a);
+  Beat(50000);
+  Info(0x9b01);
+  Beat(50010);
+  EXPECT_TRUE(Ambiguous());
+  EXPECT_EQ(client_.AmbiguityMessage(),
+            "node 1 is answered by two boards (instances 3f2a and 9b01): give each its "
+            "own node id");
+  // Every wait ends at once, saying so.
+  WaitEnd end{};
+  EXPECT_FALSE(client_.Await([] { return true; }, {}, &end, &why_));
+  EXPECT_EQ(end, WaitEnd::kAmbiguous);
+  EXPECT_EQ(why_, client_.AmbiguityMessage());
+}
+
+TEST_F(TwoBoards, ARestartIntoANewInstanceIsNotASecondBoard) {
+  // A simulated board draws a new instance at every start; its clock starts anew.
+  Info(0x3f2a);
+  Beat(50000);
+  Beat(51000);
+  Info(0x9b01);
+  Beat(0);
+  Beat(1000);
+  EXPECT_FALSE(Ambiguous());
+  EXPECT_EQ(client_.info()->instance, 0x9b01);
+  // ...unless the old one speaks again.
+  Info(0x3f2a);
+  EXPECT_TRUE(Ambiguous());
+}
+
+TEST_F(TwoBoards, InterleavedClocksWithoutBoardInfoAreTwoBoards) {
+  // An older image sends no BoardInfo: one step back is a restart, two are two boards.
+  Beat(50000);
+  Beat(100);
+  Beat(1100);
+  EXPECT_FALSE(Ambiguous());
+  Beat(51000);
+  Beat(2100);
+  EXPECT_TRUE(Ambiguous());
+  EXPECT_EQ(client_.AmbiguityMessage(),
+            "node 1 is answered by two boards (their heartbeat clocks interleave): give "
+            "each its own node id");
+}
+
+TEST_F(TwoBoards, IdentifyTellsThemApartBeforeTheirClocksSeemToHaveRun) {
+  // The younger board heard first: the older one's clock is 25 s ahead, a jump that
+  // must not count as the node's time having run (it would end the wait unjudged).
+  for (std::uint32_t t = 0; t < 3000; t += 1000) {
+    Beat(50000 + t);
+    Beat(300000 + t);
+  }
+  WaitEnd end{};
+  EXPECT_FALSE(client_.Identify(&end, &why_));
+  EXPECT_EQ(end, WaitEnd::kAmbiguous);
+  EXPECT_EQ(client_.AmbiguityMessage(),
+            "node 1 is answered by two boards (their heartbeat clocks interleave): give "
+            "each its own node id");
+}
+
+TEST_F(TwoBoards, IdentifyOfOneBoardEndsOnceItsClockRanAPeriodAndATenth) {
+  Info(0x3f2a);
+  for (std::uint32_t t = 300000; t <= 311000; t += 1000) Beat(t);
+  WaitEnd end{};
+  EXPECT_TRUE(client_.Identify(&end, &why_)) << why_;
+  EXPECT_EQ(client_.info()->instance, 0x3f2a);
+}
+
+TEST_F(TwoBoards, AnotherNodesBoardsAreNotThisOnes) {
+  protocol::BoardInfo info;
+  info.instance = 0x1111;
+  ASSERT_TRUE(board_->Send(protocol::Encode(info, kNode + 1), &why_));
+  Info(0x3f2a);
+  Beat(1000);
+  EXPECT_FALSE(Ambiguous());
+  EXPECT_EQ(client_.instances(), (std::vector<std::uint16_t>{0x3f2a}));
+}
+
+TEST_F(AwaitAtTheBoardsPace, IdentifyListensABoardInfoPeriodOfTheBoardsOwnTime) {
+  // A board at a hundredth of real time, a heartbeat every 100 ms of its time: 110 ms
+  // of its time end at its third heartbeat (200 ms), 20 s of this machine's.
+  link_.board_rate = 0.01;
+  ASSERT_TRUE(client_.Identify(&end_, &why_)) << why_;
+  EXPECT_NEAR(WallSeconds(), 20.0, 0.01);
+  EXPECT_FALSE(client_.info());  // this scripted board sends none
+}
+
+TEST_F(AwaitAtTheBoardsPace, IdentifyOfASilentNodeSaysSoInTheOneWording) {
+  link_.silent_after = std::chrono::seconds(0);
+  ASSERT_FALSE(client_.Identify(&end_, &why_));
+  EXPECT_EQ(end_, WaitEnd::kSilent);
+  EXPECT_EQ(why_,
+            "node 1 is silent (is the board powered and on the in-process bus? try mjc "
+            "list)");
 }
 
 }  // namespace

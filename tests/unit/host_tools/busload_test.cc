@@ -29,7 +29,7 @@ TEST(BusLoad, FdFrameFollowsTheFormat) {
 }
 
 TEST(BusLoad, DefaultRatesFitTheBudgetOnFdNotOnClassical) {
-  const app::CanNodeConfig defaults;
+  const protocol::TelemetryRates defaults;
   const auto fd = host::ComputeBusLoad(defaults, 8, BusTiming{true, 1e6, 5e6});
   const auto classic = host::ComputeBusLoad(defaults, 8, BusTiming{false, 1e6, 1e6});
   EXPECT_LE(fd.total_fraction, 0.5);
@@ -39,14 +39,14 @@ TEST(BusLoad, DefaultRatesFitTheBudgetOnFdNotOnClassical) {
 TEST(BusLoad, HighestClassicalTelemetryRateByHand) {
   // Classical CAN at 1 Mbit/s, 8 boards, worst-case stuffing: an 8-byte frame is
   // 135 bits = 135 µs, the 3-byte host heartbeat 47 + 24 + ⌊57/4⌋ = 85 µs. Besides the
-  // angles, each board sends torque, power, energy, control and heartbeat at 10 Hz, its
-  // BoardInfo at 1 Hz and five 8-byte window frames at 4 windows/s, 71 frames/s:
-  // 71 × 135 µs = 9.585 ms/s; the host's heartbeat to it adds 10 × 85 µs = 0.85 ms/s.
-  // Eight boards: 83.48 ms/s, a load of 0.08348. The 50 % budget leaves 0.41652 for
-  // angle frames of 8 × 135 µs each: 0.41652 / 1.08e-3 = 385.667 Hz.
-  const double hz =
-      host::MaxTelemetryHz(app::CanNodeConfig{}, 8, BusTiming{false, 1e6, 1e6}, 0.5);
-  EXPECT_NEAR(hz, 0.41652 / 1.08e-3, 1e-9);
+  // angles, each board sends torque, power, energy, control, heartbeat and BoardInfo at
+  // 10 Hz and five 8-byte window frames at 4 windows/s, 80 frames/s: 80 × 135 µs =
+  // 10.8 ms/s; the host's heartbeat to it adds 10 × 85 µs = 0.85 ms/s. Eight boards:
+  // 93.2 ms/s, a load of 0.0932. The 50 % budget leaves 0.4068 for angle frames of
+  // 8 × 135 µs each: 0.4068 / 1.08e-3 = 376.667 Hz.
+  const double hz = host::MaxTelemetryHz(protocol::TelemetryRates{}, 8,
+                                         BusTiming{false, 1e6, 1e6}, 0.5);
+  EXPECT_NEAR(hz, 0.4068 / 1.08e-3, 1e-9);
 }
 
 }  // namespace

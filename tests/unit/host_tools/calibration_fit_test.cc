@@ -561,5 +561,48 @@ TEST(CalibrationFile, IntegersOutOfTheirWireRangeAreRefused) {
   EXPECT_EQ(record->fit_rms_urad, 4294967295u);
 }
 
+TEST(CalibrationFile, UnknownKeysAreRefusedAndNamed) {
+  nlohmann::json j = GoodCalibrationJson();
+  j.erase("c_right_deg");
+  j["c_rigth_deg"] = 1.1;
+  std::string why;
+  EXPECT_FALSE(CalibrationFromJson(j, &why));
+  EXPECT_EQ(why, "calibration: unknown key 'c_rigth_deg' (did you mean 'c_right_deg'?)");
+  j = GoodCalibrationJson();
+  j["operator"] = "ana";
+  EXPECT_FALSE(CalibrationFromJson(j, &why));
+  EXPECT_EQ(why.rfind("calibration: unknown key 'operator' (known: c_right_deg, ", 0), 0u)
+      << why;
+  EXPECT_FALSE(CalibrationFromJson(nlohmann::json::array({1, 2}), &why));
+  EXPECT_EQ(why, "calibration: the top level must be an object");
+}
+
+TEST(CalibrationFile, ImplausibleValuesAreKeptWithAWarningEach) {
+  nlohmann::json j = GoodCalibrationJson();
+  std::vector<std::string> warnings;
+  std::string why;
+  ASSERT_TRUE(CalibrationFromJson(j, &why, &warnings)) << why;
+  EXPECT_TRUE(warnings.empty());
+  // 0.0192 rad typed as degrees is plausible; 19.2 (degrees of a radian slip) is not.
+  j["c_right_deg"] = 19.2;
+  j["sea_stiffness_Nm_per_rad"] = 63.0;
+  ASSERT_TRUE(CalibrationFromJson(j, &why, &warnings)) << why;
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0].rfind("calibration: c_right_deg = 19.2° is beyond the "
+                              "plausible ±10°",
+                              0),
+            0u)
+      << warnings[0];
+  EXPECT_NE(warnings[1].find("sea_stiffness_Nm_per_rad = 63 is outside the plausible "
+                             "[0.063, 6.3] N·m/rad"),
+            std::string::npos)
+      << warnings[1];
+  // Beyond what the board accepts: refused, not warned about.
+  j["c_right_deg"] = 30.0;
+  warnings.clear();
+  EXPECT_FALSE(CalibrationFromJson(j, &why, &warnings));
+  EXPECT_NE(why.find("outside ±28.6°"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace mjc::host

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -85,8 +86,56 @@ TEST_F(WindowsCsv, RoundTripsEveryWindowAndDerivesTheRepetitions) {
   EXPECT_EQ(first.windows[1].positive_J, 0.011);
   EXPECT_EQ(first.windows[1].negative_J, -0.006);
   EXPECT_EQ(first.windows[2].motion, Motion::kExtension);
-  EXPECT_EQ((*read)[1].repetitions, 2);  // only repetition 1 seen
+  EXPECT_EQ((*read)[1].repetitions, 5);  // as planned, not as seen
   EXPECT_FALSE(SameAmplitude(*read));
+}
+
+TEST_F(WindowsCsv, CountsFromOneAndSaysSoAndWhatIsAnalysed) {
+  WriteWindowsCsv({{25.0, 5, {Flexion(0, 40, true), Flexion(2, 45, true)}}}, dir_);
+  std::stringstream text;
+  text << std::ifstream(dir_ / "windows.csv").rdbuf();
+  const std::string csv = text.str();
+  EXPECT_EQ(
+      csv.rfind("# mjc windows.csv version 2: trial and repetition count from 1", 0), 0u)
+      << csv;
+  // Repetition 0 (the board's count) is the first, outside the middle three; 2 is the
+  // third, analysed.
+  EXPECT_NE(csv.find("\n1,25,5,flexion,1,0,1,40,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\n1,25,5,flexion,3,1,1,45,"), std::string::npos) << csv;
+  int version = 0;
+  std::string why;
+  const auto read = ReadWindowsCsv(dir_, &why, &version);
+  ASSERT_TRUE(read) << why;
+  EXPECT_EQ(version, 2);
+  EXPECT_EQ((*read)[0].windows[0].repetition, 0);
+  EXPECT_EQ((*read)[0].windows[1].repetition, 2);
+}
+
+TEST_F(WindowsCsv, AVersionOneFileIsReadCountingFromZero) {
+  std::ofstream(dir_ / "windows.csv")
+      << "trial,amplitude_deg,motion,repetition,eta_valid,eta_pct,loading_J,"
+         "unloading_J,net_J,positive_J,negative_J,peak_power_W,peak_torque_Nm\n"
+         "1,25,flexion,0,1,40,0.01,-0.005,0.005,0.011,-0.006,0.01,0.1\n"
+         "1,25,flexion,4,1,42,0.01,-0.005,0.005,0.011,-0.006,0.01,0.1\n";
+  int version = 0;
+  std::string why;
+  const auto read = ReadWindowsCsv(dir_, &why, &version);
+  ASSERT_TRUE(read) << why;
+  EXPECT_EQ(version, 1);
+  EXPECT_EQ((*read)[0].repetitions, 5);
+  EXPECT_EQ((*read)[0].windows[1].repetition, 4);
+}
+
+TEST(TrialTables, SayWhatThePlusMinusIs) {
+  TrialWindows trial{25.0, 5, {Flexion(1, 40, true), Flexion(2, 50, true)}};
+  EXPECT_NE(TrialTables({trial}, false)
+                .find("Each energy: mean ± standard error of the mean (sample standard "
+                      "deviation / √n) over the middle three flexions (repetitions 2-4 "
+                      "of 5)"),
+            std::string::npos)
+      << TrialTables({trial}, false);
+  EXPECT_NE(TrialTables({trial}, true).find("sample standard deviation (n − 1)"),
+            std::string::npos);
 }
 
 TEST_F(WindowsCsv, AFileOfAnotherLayoutIsRefusedWithTheReason) {
@@ -107,7 +156,8 @@ TEST_F(WindowsCsv, AnUnknownMotionIsMalformed) {
   std::ofstream(dir_ / "windows.csv") << text;
   std::string why;
   EXPECT_FALSE(ReadWindowsCsv(dir_, &why));
-  EXPECT_NE(why.find("line 2 is malformed"), std::string::npos) << why;
+  EXPECT_NE(why.find("line 3 is malformed"), std::string::npos)
+      << why;  // after the note and header
 }
 
 TEST_F(WindowsCsv, AnUnwritableFolderThrowsNamingTheFile) {
@@ -134,7 +184,9 @@ TEST_F(WindowsCsv, TheFigureIsAPngOfEveryTrial) {
   std::string why;
   for (const bool repeatability : {true, false}) {
     std::filesystem::remove(dir_ / "eta.png");
-    ASSERT_TRUE(PlotTrials(dir_, repeatability, &why)) << why;
+    ASSERT_TRUE(PlotTrials(dir_, repeatability, "a title", &why)) << why;
+    // gnuplot's chatter stays in its log, removed once it succeeded.
+    EXPECT_FALSE(std::filesystem::exists(dir_ / "eta.gp.log"));
     std::ifstream png(dir_ / "eta.png", std::ios::binary);
     char magic[8] = {};
     png.read(magic, sizeof magic);

@@ -74,17 +74,68 @@ inline constexpr int kStartAnswerMs = 10000;
 // tools read its state and its clock from the heartbeat.
 inline constexpr std::chrono::milliseconds kHeartbeatSilence{10000};
 
+// How often a board sends its BoardInfo, in its own time (TelemetryRates::info_hz). A
+// second board answering with the same node id has sent one within this much of its
+// time, so a node heard for longer has shown every board behind it.
+inline constexpr std::chrono::milliseconds kBoardInfoPeriod{
+    1000 / protocol::TelemetryRates{}.info_hz};
+
 // Why a bounded wait ended without what it waited for.
 enum class WaitEnd : std::uint8_t {
   kSilent = 1,       // no frame from the node for Patience::silence
   kBoardTime = 2,    // the board's clock advanced Patience::board
   kLinkFailed = 3,   // this side could not send or receive
   kInterrupted = 4,  // the interrupt flag (BoardClient::SetInterrupt) was raised
+  kAmbiguous = 5,    // two boards answer with this node id (BoardClient::ambiguous)
 };
 
 enum class HostHeartbeats : std::uint8_t {
   kOff = 0,   // the board is not supervised by this client
   kSend = 1,  // a HostHeartbeat every kHostHeartbeatPeriod while the client polls
+};
+
+// Who answers with one node id, from its BoardInfo frames and heartbeat clock: one
+// board, or two or more (ambiguous). Two boards show as BoardInfo frames of two
+// instances while neither restarted, an instance heard again after another, or the
+// heartbeat's tick running backwards twice with no BoardInfo (a restart) between. A
+// restart into a new instance (a simulated board draws one at every start) is one
+// board: its clock starts anew right after its BoardInfo.
+class BoardIdentity {
+ public:
+  void OnInfo(const protocol::BoardInfo& info);
+  void OnHeartbeat(std::uint32_t tick);
+
+  bool ambiguous() const { return ambiguous_; }
+  // "node 3 is answered by two boards (instances 3f2a and 9b01): give each its own node
+  // id"; empty while not ambiguous().
+  std::string Message(int node) const;
+  // The BoardInfo last heard (nullopt before one arrives).
+  const std::optional<protocol::BoardInfo>& info() const { return info_; }
+  // Every instance heard, in the order heard.
+  const std::vector<std::uint16_t>& instances() const { return instances_; }
+  std::uint64_t heartbeats() const { return heartbeats_; }
+  // The tick of the last heartbeat.
+  std::uint32_t tick() const { return tick_; }
+  // How far the node's clock has run while heard, in ticks: the sum of the steps
+  // between consecutive heartbeats that go forwards by at most two seconds. Two boards'
+  // interleaved clocks jump back and forth by more, and add nothing: a wait for the
+  // node's time cannot end on such a jump before the two boards are told apart.
+  std::uint64_t elapsed_ticks() const { return elapsed_; }
+
+ private:
+  std::optional<protocol::BoardInfo> info_;
+  // The instance taken as this node's, those that restarted into another, and an
+  // instance not yet judged: a restart when the next heartbeat starts its clock anew.
+  std::optional<std::uint16_t> current_;
+  std::optional<std::uint16_t> new_;
+  std::vector<std::uint16_t> instances_;
+  std::vector<std::uint16_t> retired_;
+  bool info_since_heartbeat_ = false;
+  int clock_reversals_ = 0;
+  bool ambiguous_ = false;
+  std::uint64_t heartbeats_ = 0;
+  std::uint32_t tick_ = 0;
+  std::uint64_t elapsed_ = 0;
 };
 
 class BoardClient {
@@ -128,10 +179,29 @@ class BoardClient {
   bool Poll(int timeout_ms, std::string* why);
 
   // The wait loop every caller shares: Poll until `done()` holds (true), or until the
-  // patience runs out, the link fails or the interrupt flag is raised (false, with
-  // *end and *why saying which). `done` may take what arrived (windows, samples).
+  // patience runs out, the link fails, the interrupt flag is raised or the node turns
+  // out to be two boards (false, with *end and *why saying which). `done` may take what
+  // arrived (windows, samples).
   bool Await(const std::function<bool()>& done, const Patience& patience, WaitEnd* end,
              std::string* why);
+
+  // Listens until the node has shown who it is: its clock has advanced a BoardInfo
+  // period and a tenth (kBoardInfoPeriod; every board answering with this node id has
+  // then sent its BoardInfo) — 110 ms of a real board's time. False when it stays
+  // silent, or is two boards (kAmbiguous), with *end and *why saying which. A board
+  // that sends no BoardInfo (an older image) is identified all the same, with info()
+  // empty. `silence` as Patience::silence. The tools call it before they act on a node.
+  bool Identify(WaitEnd* end, std::string* why,
+                std::chrono::milliseconds silence = Patience{}.silence);
+
+  // Two or more physical boards answer with this node id (BoardIdentity). Their frames
+  // are then indistinguishable, and every wait ends (kAmbiguous).
+  bool ambiguous() const { return identity_.ambiguous(); }
+  std::string AmbiguityMessage() const { return identity_.Message(node_); }
+  // The BoardInfo last heard from the node (nullopt before one arrives).
+  const std::optional<protocol::BoardInfo>& info() const { return identity_.info(); }
+  // Every instance (BoardInfo::instance) heard from this node, in the order heard.
+  const std::vector<std::uint16_t>& instances() const { return identity_.instances(); }
 
   // Makes every wait return (WaitEnd::kInterrupted) once *flag is true: a signal
   // handler's flag, so a tool can stop what it started.
@@ -213,6 +283,7 @@ class BoardClient {
   std::uint64_t bus_off_at_start_ = 0;
   std::uint64_t bus_off_seen_ = 0;
   std::function<void(std::uint64_t)> on_bus_off_;
+  BoardIdentity identity_;
 };
 
 }  // namespace mjc::host

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "mjc/app/can_node.h"
+#include "mjc/protocol/params.h"
 
 namespace mjc::host {
 
@@ -43,13 +43,13 @@ struct BusLoad {
 // The load of `boards` boards transmitting at `rates` (the board's own telemetry
 // schedule) and their window summaries, plus the host's heartbeat to each board.
 // Payload lengths are the message table's (protocol/messages.h).
-BusLoad ComputeBusLoad(const app::CanNodeConfig& rates, int boards,
+BusLoad ComputeBusLoad(const protocol::TelemetryRates& rates, int boards,
                        const BusTiming& timing);
 
 // The highest rate of the angle telemetry (the 1 kHz frame) that keeps `boards`
 // boards' total load at or below `budget` with the other rates as given; 0 if even the
 // rest does not fit.
-double MaxTelemetryHz(app::CanNodeConfig rates, int boards, const BusTiming& timing,
+double MaxTelemetryHz(protocol::TelemetryRates rates, int boards, const BusTiming& timing,
                       double budget);
 
 std::string FormatBusLoad(const BusLoad& load, const BusTiming& timing, int boards);

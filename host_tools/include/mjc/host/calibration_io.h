@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "mjc/host/board_client.h"
 #include "mjc/protocol/calibration_record.h"
@@ -15,13 +17,23 @@ namespace mjc::host {
 
 nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& record);
 
+// The keys of a calibration file, as CalibrationToJson writes them.
+inline constexpr std::string_view kCalibrationKeys[] = {
+    "c_right_deg",      "c_left_deg",   "alpha",      "sea_stiffness_Nm_per_rad",
+    "joint_zero_count", "fit_rms_urad", "fit_lag_us", "fitted_at_unix_s"};
+
 // Reads and range-checks a calibration (the board's own checks, run here first): nullopt
 // with the reason naming the field when it is missing, of the wrong type or out of
-// range. The fit fields (fit_rms_urad, fit_lag_us, fitted_at_unix_s) are optional
-// (absent: 0) but, when present, must be integers within their wire type's range.
+// range, or a key that is not a calibration's (named with the key it resembles:
+// mjc/strict_json.h). The fit fields (fit_rms_urad, fit_lag_us, fitted_at_unix_s) are
+// optional (absent: 0) but, when present, must be integers within their wire type's
+// range. Values the board accepts but no Maestro joint has (an offset beyond ±10°, α
+// outside [0.5, 2], a stiffness beyond a decade of the SEA's 0.63 N·m/rad) are kept and
+// each is described in *warnings, one line each, with the plausible range and why.
 // Never throws.
-std::optional<protocol::CalibrationRecord> CalibrationFromJson(const nlohmann::json& json,
-                                                               std::string* why);
+std::optional<protocol::CalibrationRecord> CalibrationFromJson(
+    const nlohmann::json& json, std::string* why,
+    std::vector<std::string>* warnings = nullptr);
 
 enum class UploadStatus : std::uint8_t {
   kAnswered = 0,        // the board answered: see result and detail

@@ -91,6 +91,9 @@ class CanLink {
 
   const LinkStats& stats() const { return stats_; }
 
+  // Where the frames go, for messages: the interface's name ("vcan0").
+  virtual std::string Name() const { return "the in-process bus"; }
+
  protected:
   LinkStats stats_;
 
@@ -108,6 +111,7 @@ class SocketCanLink final : public CanLink {
   static std::unique_ptr<SocketCanLink> Open(const std::string& interface,
                                              std::string* why);
   ~SocketCanLink() override;
+  std::string Name() const override { return interface_; }
   SocketCanLink(const SocketCanLink&) = delete;
   SocketCanLink& operator=(const SocketCanLink&) = delete;
 

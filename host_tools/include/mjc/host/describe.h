@@ -19,6 +19,20 @@ std::string_view FaultName(Fault fault);
 // "303 (CAN bus-off)": the stable code first, as logs and scripts match it.
 std::string DescribeFault(Fault fault);
 
+// "idle", "calibrating", "running", "FAULT".
+std::string_view StateName(protocol::BoardState state);
+// "application" or "bootloader".
+std::string_view ImageName(protocol::ImageKind image);
+// "power-on", "reset pin", "software", "watchdog", "other", "unknown".
+std::string_view ResetCauseName(protocol::ResetCause cause);
+// A build as the boards and mjc --version print it: 8 hex digits, "+dirty" when built
+// from a tree with uncommitted changes ("1958ba84+dirty").
+std::string BuildName(std::uint32_t commit, bool dirty);
+
+// The one wording of an absent or silent node, with the checks to make: "node 5 is
+// silent (is the board powered and on vcan0? try mjc list)".
+std::string SilentNode(int node, std::string_view iface);
+
 // Why the board refused a command ("the board is not idle"), or "accepted".
 std::string_view OutcomeName(protocol::CommandOutcomeCode outcome);
 

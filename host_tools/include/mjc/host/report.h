@@ -45,9 +45,10 @@ class CsvTable {
 // written or closed, so a full disk or a missing folder is never a silent loss.
 void WriteFile(const std::filesystem::path& path, std::string_view text);
 
-// Runs gnuplot on `script` (written next to its outputs so it can be re-run by hand);
-// gnuplot's own messages go to stderr. Returns false with a reason when gnuplot is
-// missing or fails.
+// Runs gnuplot on `script` (written next to its outputs so it can be re-run by hand).
+// What gnuplot says goes to `script`.log, removed when it succeeds. Returns false with
+// a reason (gnuplot's last line, and where the rest is) when gnuplot is missing or
+// fails.
 bool RunGnuplot(const std::filesystem::path& script, std::string* why);
 
 }  // namespace mjc::host

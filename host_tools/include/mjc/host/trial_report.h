@@ -26,19 +26,27 @@ std::string TrialTables(const std::vector<TrialWindows>& trials, bool repeatabil
 // run of one amplitude).
 bool SameAmplitude(const std::vector<TrialWindows>& trials);
 
-// Writes windows.csv (every window) into `dir`; throws std::runtime_error naming the
-// file when it cannot be written.
+// Writes windows.csv (every window) into `dir`, version 2: a note line, the header,
+// then a row a window with its trial and repetition counted from 1 and whether the
+// tables analyse it; throws std::runtime_error naming the file when it cannot be
+// written.
 void WriteWindowsCsv(const std::vector<TrialWindows>& trials,
                      const std::filesystem::path& dir);
 
-// Reads a windows.csv back, each trial's repetitions taken as its largest repetition
-// + 1; nullopt with the reason when it is missing or malformed.
+// Reads a windows.csv back, of either version (*version, when given, says which): the
+// windows' repetitions counted from 0 again, as the board counts them. A version 1
+// file's trials take their largest repetition + 1 as their repetitions. nullopt with
+// the reason when it is missing or malformed.
 std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::path& dir,
-                                                        std::string* why);
+                                                        std::string* why,
+                                                        int* version = nullptr);
 
-// eta.png in `dir` (gnuplot): η of every valid flexion window against the trial number
-// (repeatability) or the amplitude. False with the reason when gnuplot fails; throws
-// std::runtime_error when its script cannot be written.
-bool PlotTrials(const std::filesystem::path& dir, bool repeatability, std::string* why);
+// eta.png in `dir` (gnuplot) from its `data` (a version 2 windows.csv): η of every valid
+// flexion window against the trial number (repeatability) or the amplitude, the analysed
+// flexions filled, the others open, under `title`. False with the reason when gnuplot
+// fails; throws std::runtime_error when its script cannot be written.
+bool PlotTrials(const std::filesystem::path& dir, bool repeatability,
+                const std::string& title, std::string* why,
+                const std::string& data = "windows.csv");
 
 }  // namespace mjc::host

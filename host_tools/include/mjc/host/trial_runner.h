@@ -20,6 +20,7 @@ enum class TrialEnd : std::uint8_t {
   kFaulted = 4,      // the board faulted during the trial
   kInterrupted = 5,  // the client's interrupt flag was raised (a signal)
   kStopped = 6,      // the board went idle before the trial's end (another tool's stop)
+  kAmbiguous = 7,    // two boards answer with the node's id (BoardClient::ambiguous)
 };
 
 struct BoardTrial {

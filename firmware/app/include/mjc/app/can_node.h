@@ -24,17 +24,7 @@ namespace mjc::app {
 
 struct CanNodeConfig {
   std::uint8_t node = 1;  // 1..8
-  // Transmit rates, Hz, 0 = off; each at most the tick rate. Defaults: the angles at
-  // 1 kHz, the rest at 10 Hz, the heartbeat at 10 Hz — eight boards then load CAN FD
-  // 1/5 Mbit/s to 48.5 % with worst-case stuffing, window events and host heartbeats
-  // included (mjc busload). The energy figures need no more: the board integrates
-  // every tick and reports exact window totals.
-  std::uint16_t angles_hz = 1000;
-  std::uint16_t torque_hz = 10;
-  std::uint16_t power_hz = 10;
-  std::uint16_t energy_hz = 10;
-  std::uint16_t control_hz = 10;
-  std::uint16_t heartbeat_hz = 10;
+  protocol::TelemetryRates rates;
   // Streamed setpoints older than this stop the motor (command timeout, latched),
   // [1, 60000] ms. The default stops a motor whose host went quiet within 50.2 ms (the
   // timeout, the main loop's poll, the next tick), under the 100 ms goal for lost
@@ -49,10 +39,9 @@ struct CanNodeConfig {
   std::uint16_t host_timeout_ms = 300;
   // Largest setpoint speed while streaming, rad/s.
   AngularVelocity stream_rate = AngularVelocity::FromDouble(2.0);
-  // Who the board is (BoardInfo): sent at the first poll and then at info_hz. The board
-  // fills in its build, its reset cause and its instance.
+  // Who the board is (BoardInfo): sent at the first poll and then at rates.info_hz. The
+  // board fills in its build, its reset cause and its instance.
   protocol::BoardInfo identity;
-  std::uint16_t info_hz = 1;
 };
 
 struct CanNodeCounters {

@@ -23,6 +23,7 @@
 #include "mjc/core/position_loop.h"
 #include "mjc/core/quantities.h"
 #include "mjc/core/supervisor.h"
+#include "mjc/core/tick_io.h"
 #include "mjc/core/trajectory.h"
 #include "mjc/core/velocity_estimator.h"
 
@@ -84,18 +85,6 @@ enum class ControlConfigError : std::uint8_t {
   kVelocityWindow = 6,
   kPositionLoop = 7,
   kSupervisor = 8,
-};
-
-// What the hardware (or the simulator) read at the start of the tick.
-struct Sample {
-  std::uint16_t motor_count = 0;  // quadrature timer count
-  std::uint16_t joint_frame = 0;  // the joint encoder's 16-bit SPI read frame
-  bool tick_overrun = false;      // the previous tick did not finish in time
-};
-
-struct Actuation {
-  Duty duty;                    // zero whenever the bridge is disabled
-  bool bridge_enabled = false;  // the H-bridge enable line
 };
 
 struct Telemetry {

@@ -236,10 +236,10 @@ struct Heartbeat {
   Fault fault = Fault::kNone;
   std::uint32_t tick = 0;
 };
-// Who a board is, sent at start-up and then once a second: the image it runs, the build
-// that made it, why it last started, and an identity of the physical board (from the
-// chip's unique id; a simulated board draws one), so that two boards answering with one
-// node id are told apart.
+// Who a board is, sent at start-up and then ten times a second: the image it runs, the
+// build that made it, why it last started, and an identity of the physical board (from
+// the chip's unique id; a simulated board draws one), so that two boards answering with
+// one node id are told apart.
 struct BoardInfo {
   std::uint32_t build = 0;  // the build's commit: the first 8 hex digits of its hash
   bool dirty = false;       // built from a tree with uncommitted changes

@@ -22,6 +22,23 @@ namespace mjc::protocol {
 // time (a simulated one on a loaded machine).
 inline constexpr std::uint32_t kBoardTickHz = 10000;
 
+// The board's transmit rates, Hz, 0 = off; each at most the tick rate (the kNode
+// parameters telemetry_*_hz, heartbeat_hz set them). Defaults: the angles at 1 kHz, the
+// rest at 10 Hz, the board's identity (BoardInfo) also at 10 Hz — so a tool learns within
+// 100 ms of a board's time whether two boards answer with one node id, before it acts;
+// the bus load of eight boards is
+// `./bench`'s busload_8x1khz_fd_pct (mjc busload). The energy figures need no more: the
+// board integrates every tick and reports exact window totals.
+struct TelemetryRates {
+  std::uint16_t angles_hz = 1000;
+  std::uint16_t torque_hz = 10;
+  std::uint16_t power_hz = 10;
+  std::uint16_t energy_hz = 10;
+  std::uint16_t control_hz = 10;
+  std::uint16_t heartbeat_hz = 10;
+  std::uint16_t info_hz = 10;  // BoardInfo
+};
+
 // Who applies a write.
 enum class ParamAccess : std::uint8_t {
   kNode = 0,      // the CAN node's own setting: applied at once

@@ -1,0 +1,56 @@
+// Every board on a bus, heard without asking (mjc list): their heartbeats and
+// BoardInfo frames, per node id, with two boards answering for one id told apart
+// (BoardIdentity).
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "mjc/host/board_client.h"
+#include "mjc/host/can_link.h"
+#include "mjc/protocol/messages.h"
+
+namespace mjc::host {
+
+struct ScannedNode {
+  BoardIdentity identity;
+  std::optional<protocol::Heartbeat> heartbeat;  // the last one
+  int infos = 0;                                 // BoardInfo frames heard
+  std::uint64_t frames = 0;                      // frames the node sent
+  // It has shown every board behind its id: its clock advanced 1.1 BoardInfo periods
+  // since first heard (each board answering for it sent a BoardInfo meanwhile), or it
+  // sent three BoardInfo frames (two periods, for a board without heartbeats), or 30
+  // heartbeats (three seconds at the default 10 Hz: a board whose clock does not move).
+  bool shown = false;
+};
+
+class BusScan {
+ public:
+  // Takes one frame off the bus; a host's frames and other ids are ignored.
+  void Handle(const protocol::CanFrame& frame);
+  // True once a node was heard and every node heard has shown itself.
+  bool Complete() const;
+  const std::map<int, ScannedNode>& nodes() const { return nodes_; }
+
+ private:
+  std::map<int, ScannedNode> nodes_;
+};
+
+enum class ScanEnd : std::uint8_t {
+  kComplete = 0,     // every node heard has shown itself
+  kSilent = 1,       // nothing at all was heard for the silence cap
+  kLinkFailed = 2,   // *why says what
+  kInterrupted = 3,  // *interrupt was raised
+};
+
+// Listens on `link` (its filters are cleared) until the scan is complete, the bus has
+// been silent for `silence` (a bus without a board: the only wall-clock bound, and it
+// ends nothing a board is doing), the link fails or *interrupt turns true.
+ScanEnd ScanBus(CanLink& link, BusScan* scan, std::chrono::milliseconds silence,
+                const std::atomic<bool>* interrupt, std::string* why);
+
+}  // namespace mjc::host

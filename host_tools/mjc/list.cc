@@ -1,0 +1,136 @@
+// mjc list: every board on the bus, heard without asking anything: node id, image,
+// build (and whether it is this mjc's), state, calibration, latched fault, reset cause,
+// and two boards answering with one node id. It listens until each node heard has
+// shown every board behind its id (host::BusScan: a BoardInfo period and a tenth of
+// the boards' own time), or the bus has been silent for --silence-ms.
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "commands.h"
+#include "mjc/build_id.h"
+#include "mjc/host/bus_scan.h"
+#include "mjc/host/describe.h"
+
+namespace mjc::cli {
+namespace {
+
+std::string Hex4(std::uint16_t v) {
+  char out[8];
+  std::snprintf(out, sizeof out, "%04x", v);
+  return out;
+}
+
+// "= mjc", "≠ mjc", or "commit = mjc, dirty": how a board's build compares with this
+// tool's. The same commit built from a dirty tree is not known to be the same code.
+std::string BuildMatch(const protocol::BoardInfo& info) {
+  if (info.build != build::kCommit) return "differs from mjc";
+  if (info.dirty || build::kDirty) return "mjc's commit, dirty";
+  return "= mjc";
+}
+
+nlohmann::json NodeJson(int node, const host::ScannedNode& n) {
+  nlohmann::json j = {{"node", node}, {"ambiguous", n.identity.ambiguous()}};
+  nlohmann::json instances = nlohmann::json::array();
+  for (const std::uint16_t i : n.identity.instances()) instances.push_back(Hex4(i));
+  j["instances"] = instances;
+  if (n.identity.ambiguous()) j["message"] = n.identity.Message(node);
+  if (const auto& info = n.identity.info()) {
+    j["image"] = host::ImageName(info->image);
+    j["build"] = host::BuildName(info->build, false);
+    j["dirty"] = info->dirty;
+    j["build_matches_mjc"] =
+        info->build == build::kCommit && !info->dirty && !build::kDirty;
+    j["reset_cause"] = host::ResetCauseName(info->reset_cause);
+    j["instance"] = Hex4(info->instance);
+  } else {
+    for (const char* key :
+         {"image", "build", "dirty", "build_matches_mjc", "reset_cause", "instance"}) {
+      j[key] = nullptr;
+    }
+  }
+  if (const auto& h = n.heartbeat) {
+    j["state"] = host::StateName(h->state);
+    j["calibrated"] = h->calibrated;
+    j["fault"] = h->fault == Fault::kNone
+                     ? nlohmann::json(nullptr)
+                     : nlohmann::json{{"code", static_cast<int>(h->fault)},
+                                      {"name", host::FaultName(h->fault)}};
+  } else {
+    j["state"] = nullptr;
+    j["calibrated"] = nullptr;
+    j["fault"] = nullptr;
+  }
+  return j;
+}
+
+}  // namespace
+
+void AddList(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "list", "Every board on the bus: node, image, build, state, calibration, fault");
+  static std::string iface;
+  static int silence_ms = 3000;
+  static bool json = false;
+  AddIfaceOption(cmd, &iface);
+  cmd->add_option("--silence-ms", silence_ms,
+                  "Give up after this long without a single frame (an empty bus)")
+      ->check(InRange(100, 60000, "ms"))
+      ->capture_default_str();
+  cmd->add_flag("--json", json, "One JSON object per node and line");
+  cmd->callback([] {
+    auto link = OpenLink(iface);
+    const std::atomic<bool>& stop = StopOnSignals();
+    host::BusScan scan;
+    std::string why;
+    const host::ScanEnd end =
+        host::ScanBus(*link, &scan, std::chrono::milliseconds(silence_ms), &stop, &why);
+    if (end == host::ScanEnd::kLinkFailed) throw Failure(why);
+    if (end == host::ScanEnd::kInterrupted) throw Failure(Exit::kStopped, "interrupted");
+    if (scan.nodes().empty()) {
+      throw Failure(Exit::kNoAnswer,
+                    "no board on " + iface + " (nothing heard for " +
+                        std::to_string(silence_ms) +
+                        " ms: are the boards powered, and the interface up at the "
+                        "bus's bitrate?)");
+    }
+    std::string ambiguous;
+    if (!json) {
+      std::printf("%-4s  %-11s  %-14s  %-18s  %-11s  %-10s  %-9s  %-8s  %s\n", "node",
+                  "image", "build", "", "state", "calibrated", "reset", "instance",
+                  "fault");
+    }
+    for (const auto& [node, n] : scan.nodes()) {
+      if (n.identity.ambiguous()) {
+        ambiguous += (ambiguous.empty() ? "" : "; ") + n.identity.Message(node);
+      }
+      if (json) {
+        std::printf("%s\n", NodeJson(node, n).dump().c_str());
+        continue;
+      }
+      if (n.identity.ambiguous()) {
+        std::printf("%4d  TWO BOARDS: %s\n", node, n.identity.Message(node).c_str());
+        continue;
+      }
+      const auto& info = n.identity.info();
+      const auto& h = n.heartbeat;
+      std::printf(
+          "%4d  %-11s  %-14s  %-18s  %-11s  %-10s  %-9s  %-8s  %s\n", node,
+          info ? std::string(host::ImageName(info->image)).c_str() : "?",
+          info ? host::BuildName(info->build, info->dirty).c_str() : "no BoardInfo",
+          info ? BuildMatch(*info).c_str() : "(older image?)",
+          h ? std::string(host::StateName(h->state)).c_str() : "?",
+          h ? (h->calibrated ? "yes" : "no") : "?",
+          info ? std::string(host::ResetCauseName(info->reset_cause)).c_str() : "?",
+          info ? Hex4(info->instance).c_str() : "?",
+          h && h->fault != Fault::kNone ? host::DescribeFault(h->fault).c_str() : "-");
+    }
+    if (!json) {
+      std::printf("this mjc: %s\n",
+                  host::BuildName(build::kCommit, build::kDirty).c_str());
+    }
+    if (!ambiguous.empty()) throw Failure(Exit::kAmbiguous, ambiguous);
+  });
+}
+
+}  // namespace mjc::cli

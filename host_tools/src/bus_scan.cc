@@ -1,0 +1,61 @@
+#include "mjc/host/bus_scan.h"
+
+#include "mjc/protocol/codec.h"
+
+namespace mjc::host {
+
+using namespace mjc::protocol;
+
+void BusScan::Handle(const CanFrame& f) {
+  const int node = NodeOf(f.id);
+  const std::uint8_t function = FunctionOf(f.id);
+  if (node < kMinNode || node > kMaxNode || !SentByBoard(function)) return;
+  ScannedNode& n = nodes_[node];
+  ++n.frames;
+  if (function == static_cast<std::uint8_t>(Function::kBoardInfo)) {
+    BoardInfo info;
+    if (Decode(f, &info) != DecodeError::kOk) return;
+    n.identity.OnInfo(info);
+    ++n.infos;
+  } else if (function == static_cast<std::uint8_t>(Function::kHeartbeat)) {
+    Heartbeat h;
+    if (Decode(f, &h) != DecodeError::kOk) return;
+    n.identity.OnHeartbeat(h.tick);
+    n.heartbeat = h;
+  } else {
+    return;
+  }
+  constexpr auto kTicks = static_cast<std::uint32_t>(kBoardInfoPeriod.count() * 11 / 10 *
+                                                     kBoardTickHz / 1000);
+  n.shown = n.shown || n.identity.ambiguous() || n.infos >= 3 ||
+            n.identity.heartbeats() >= 30 || n.identity.elapsed_ticks() >= kTicks;
+}
+
+bool BusScan::Complete() const {
+  if (nodes_.empty()) return false;
+  for (const auto& [node, n] : nodes_) {
+    if (!n.shown) return false;
+  }
+  return true;
+}
+
+ScanEnd ScanBus(CanLink& link, BusScan* scan, std::chrono::milliseconds silence,
+                const std::atomic<bool>* interrupt, std::string* why) {
+  link.SetFilters({}, why);
+  auto heard = std::chrono::steady_clock::now();
+  for (;;) {
+    if (scan->Complete()) return ScanEnd::kComplete;
+    if (interrupt != nullptr && *interrupt) return ScanEnd::kInterrupted;
+    const ReceiveResult r = link.Receive(20, why);
+    if (r.status == ReceiveStatus::kError) return ScanEnd::kLinkFailed;
+    const auto now = std::chrono::steady_clock::now();
+    if (r) {
+      heard = now;
+      scan->Handle(r->frame);
+    } else if (now - heard > silence) {
+      return ScanEnd::kSilent;
+    }
+  }
+}
+
+}  // namespace mjc::host

@@ -1,0 +1,100 @@
+#include "mjc/host/config.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "mjc/strict_json.h"
+
+namespace mjc::host {
+namespace {
+
+bool InterfaceName(std::string_view name) {
+  if (name.empty() || name.size() > 15) return false;  // IFNAMSIZ - 1
+  for (const char c : name) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                    (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::optional<ToolConfig> ParseToolConfig(std::string_view text, std::string_view source,
+                                          std::string* why) {
+  const std::string where(source);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    *why = where + ": not valid JSON: " + e.what();
+    return std::nullopt;
+  }
+  if (!j.is_object()) {
+    *why = where + ": the top level must be an object";
+    return std::nullopt;
+  }
+  if (const auto unknown = strict::UnknownKey(j, kConfigKeys)) {
+    *why = where + ": " + *unknown;
+    return std::nullopt;
+  }
+  ToolConfig config;
+  config.source = where;
+  if (j.contains("iface")) {
+    if (!j["iface"].is_string() || !InterfaceName(j["iface"].get<std::string>())) {
+      *why = where + ": 'iface' must be an interface name (1-15 characters of " +
+             "A-Z a-z 0-9 _ . -), e.g. \"can0\"";
+      return std::nullopt;
+    }
+    config.iface = j["iface"].get<std::string>();
+  }
+  if (j.contains("node")) {
+    const auto& n = j["node"];
+    if (!n.is_number_integer() || n.get<std::int64_t>() < 1 ||
+        n.get<std::int64_t>() > 8) {
+      *why = where + ": 'node' must be an integer in 1..8, not " + n.dump();
+      return std::nullopt;
+    }
+    config.node = static_cast<int>(n.get<std::int64_t>());
+  }
+  return config;
+}
+
+std::optional<ToolConfig> LoadToolConfig(std::string* why) {
+  std::filesystem::path path;
+  bool required = false;
+  if (const char* named = std::getenv("MJC_CONFIG"); named != nullptr && *named != '\0') {
+    path = named;
+    required = true;
+  } else if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0') {
+    path = std::filesystem::path(home) / ".config/mjc/config.json";
+  }
+  ToolConfig config;
+  std::error_code error;
+  if (!path.empty() && (required || std::filesystem::exists(path, error))) {
+    std::ifstream in(path);
+    if (!in) {
+      *why = path.string() + ": cannot read the config file" +
+             (required ? " (named by MJC_CONFIG)" : "");
+      return std::nullopt;
+    }
+    std::ostringstream text;
+    text << in.rdbuf();
+    const auto parsed = ParseToolConfig(text.str(), path.string(), why);
+    if (!parsed) return std::nullopt;
+    config = *parsed;
+  }
+  if (const char* iface = std::getenv("MJC_IFACE"); iface != nullptr && *iface != '\0') {
+    if (!InterfaceName(iface)) {
+      *why = std::string("MJC_IFACE='") + iface + "' is not an interface name";
+      return std::nullopt;
+    }
+    config.iface = iface;
+  }
+  return config;
+}
+
+}  // namespace mjc::host

@@ -1,0 +1,331 @@
+#include "mjc/host/run_record.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <ctime>
+#include <fstream>
+#include <stdexcept>
+
+#include "mjc/host/describe.h"
+#include "mjc/host/report.h"
+#include "mjc/host/units.h"
+#include "mjc/strict_json.h"
+
+namespace mjc::host {
+namespace {
+
+constexpr std::string_view kFormat = "mjc run 1";
+constexpr std::string_view kKeys[] = {
+    "format",       "command",     "node",    "iface",       "board",
+    "calibration",  "robot",       "subject", "protocol",    "amplitudes_deg",
+    "frequency_hz", "repetitions", "rest_s",  "started_utc", "host",
+    "mjc",          "end"};
+constexpr std::string_view kBoardKeys[] = {"build", "dirty", "image", "reset_cause",
+                                           "instance"};
+constexpr std::string_view kHeldKeys[] = {
+    "calibrated",      "c_right_deg", "c_left_deg", "alpha", "sea_stiffness_Nm_per_rad",
+    "joint_zero_count"};
+constexpr std::string_view kEndKeys[] = {"outcome", "fault", "message"};
+constexpr std::string_view kFaultKeys[] = {"code", "name"};
+
+std::string Hex(std::uint32_t v, int digits) {
+  char out[16];
+  std::snprintf(out, sizeof out, "%0*x", digits, v);
+  return out;
+}
+
+// Reading, each failure a std::runtime_error naming the key.
+struct Reader {
+  const nlohmann::json& Get(const nlohmann::json& o, const char* key) const {
+    if (!o.contains(key)) throw std::runtime_error("'" + prefix + key + "' is missing");
+    return o[key];
+  }
+  void Known(const nlohmann::json& o, std::span<const std::string_view> keys) const {
+    if (!o.is_object()) throw std::runtime_error("'" + prefix + "' must be an object");
+    if (const auto unknown = strict::UnknownKey(o, keys, prefix)) {
+      throw std::runtime_error(*unknown);
+    }
+  }
+  std::string String(const nlohmann::json& o, const char* key) const {
+    const auto& v = Get(o, key);
+    if (!v.is_string())
+      throw std::runtime_error("'" + prefix + key + "' must be a string");
+    return v.get<std::string>();
+  }
+  double Number(const nlohmann::json& o, const char* key) const {
+    const auto& v = Get(o, key);
+    if (!v.is_number())
+      throw std::runtime_error("'" + prefix + key + "' must be a number");
+    return v.get<double>();
+  }
+  std::int64_t Integer(const nlohmann::json& o, const char* key, std::int64_t lo,
+                       std::int64_t hi) const {
+    const auto& v = Get(o, key);
+    if (!v.is_number_integer() || v.get<std::int64_t>() < lo ||
+        v.get<std::int64_t>() > hi) {
+      throw std::runtime_error("'" + prefix + key + "' must be an integer in " +
+                               std::to_string(lo) + ".." + std::to_string(hi));
+    }
+    return v.get<std::int64_t>();
+  }
+  bool Bool(const nlohmann::json& o, const char* key) const {
+    const auto& v = Get(o, key);
+    if (!v.is_boolean())
+      throw std::runtime_error("'" + prefix + key + "' must be true or false");
+    return v.get<bool>();
+  }
+  std::uint32_t HexNumber(const nlohmann::json& o, const char* key,
+                          std::size_t digits) const {
+    const std::string text = String(o, key);
+    const bool ok =
+        text.size() == digits && std::all_of(text.begin(), text.end(), [](char c) {
+          return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+        });
+    if (!ok) {
+      throw std::runtime_error("'" + prefix + key + "' must be " +
+                               std::to_string(digits) + " lower-case hex digits");
+    }
+    return static_cast<std::uint32_t>(std::stoul(text, nullptr, 16));
+  }
+  std::string prefix;
+};
+
+}  // namespace
+
+nlohmann::json RunRecordToJson(const RunRecord& r) {
+  nlohmann::json j;
+  j["format"] = kFormat;
+  j["command"] = r.command;
+  j["node"] = r.node;
+  j["iface"] = r.iface;
+  if (r.board) {
+    j["board"] = {{"build", Hex(r.board->build, 8)},
+                  {"dirty", r.board->dirty},
+                  {"image", ImageName(r.board->image)},
+                  {"reset_cause", ResetCauseName(r.board->reset_cause)},
+                  {"instance", Hex(r.board->instance, 4)}};
+  } else {
+    j["board"] = nullptr;
+  }
+  if (r.calibration) {
+    const auto& c = r.calibration->record;
+    j["calibration"] = {{"calibrated", r.calibration->calibrated},
+                        {"c_right_deg", RadToDeg(c.backlash.c_right.ToDouble())},
+                        {"c_left_deg", RadToDeg(c.backlash.c_left.ToDouble())},
+                        {"alpha", c.backlash.alpha.ToDouble()},
+                        {"sea_stiffness_Nm_per_rad", c.sea_stiffness.ToDouble()},
+                        {"joint_zero_count", c.joint_zero_count}};
+  } else {
+    j["calibration"] = nullptr;
+  }
+  j["robot"] = r.robot;
+  j["subject"] = r.subject ? nlohmann::json(*r.subject) : nlohmann::json(nullptr);
+  j["protocol"] = r.protocol;
+  j["amplitudes_deg"] = r.amplitudes_deg;
+  j["frequency_hz"] = r.frequency_hz;
+  j["repetitions"] = r.repetitions;
+  j["rest_s"] = r.rest_s;
+  j["started_utc"] = r.started_utc;
+  j["host"] = r.host;
+  j["mjc"] = r.mjc;
+  nlohmann::json fault = nullptr;
+  if (r.end.fault_code) {
+    fault = {{"code", *r.end.fault_code},
+             {"name", FaultName(static_cast<Fault>(*r.end.fault_code))}};
+  }
+  j["end"] = {{"outcome", r.end.outcome}, {"fault", fault}, {"message", r.end.message}};
+  return j;
+}
+
+std::optional<RunRecord> RunRecordFromJson(const nlohmann::json& j, std::string* why) {
+  RunRecord r;
+  Reader in;
+  try {
+    in.Known(j, kKeys);
+    if (in.String(j, "format") != kFormat) {
+      throw std::runtime_error("'format' is not \"" + std::string(kFormat) +
+                               "\" (written by another version of mjc?)");
+    }
+    r.command = in.String(j, "command");
+    r.node = static_cast<int>(in.Integer(j, "node", 1, 8));
+    r.iface = in.String(j, "iface");
+    if (const auto& b = in.Get(j, "board"); !b.is_null()) {
+      Reader sub{"board."};
+      sub.Known(b, kBoardKeys);
+      protocol::BoardInfo info;
+      info.build = sub.HexNumber(b, "build", 8);
+      info.dirty = sub.Bool(b, "dirty");
+      const std::string image = sub.String(b, "image");
+      if (image != "application" && image != "bootloader") {
+        throw std::runtime_error(
+            "'board.image' must be \"application\" or \"bootloader\"");
+      }
+      info.image = image == "bootloader" ? protocol::ImageKind::kBootloader
+                                         : protocol::ImageKind::kApplication;
+      const std::string cause = sub.String(b, "reset_cause");
+      bool known = false;
+      for (int c = 0; c <= 5; ++c) {
+        if (ResetCauseName(static_cast<protocol::ResetCause>(c)) == cause) {
+          info.reset_cause = static_cast<protocol::ResetCause>(c);
+          known = true;
+        }
+      }
+      if (!known)
+        throw std::runtime_error("'board.reset_cause' \"" + cause + "\" is unknown");
+      info.instance = static_cast<std::uint16_t>(sub.HexNumber(b, "instance", 4));
+      r.board = info;
+    }
+    if (const auto& c = in.Get(j, "calibration"); !c.is_null()) {
+      Reader sub{"calibration."};
+      sub.Known(c, kHeldKeys);
+      BoardCalibration held;
+      held.calibrated = sub.Bool(c, "calibrated");
+      held.record.backlash.c_right =
+          Angle::Quantize(DegToRad(sub.Number(c, "c_right_deg")));
+      held.record.backlash.c_left =
+          Angle::Quantize(DegToRad(sub.Number(c, "c_left_deg")));
+      held.record.backlash.alpha = Scale::Quantize(sub.Number(c, "alpha"));
+      held.record.sea_stiffness =
+          Stiffness::Quantize(sub.Number(c, "sea_stiffness_Nm_per_rad"));
+      held.record.joint_zero_count =
+          static_cast<std::uint16_t>(sub.Integer(c, "joint_zero_count", 0, 16383));
+      r.calibration = held;
+    }
+    r.robot = in.Get(j, "robot");
+    if (!r.robot.is_null() && !r.robot.is_object()) {
+      throw std::runtime_error("'robot' must be null or an object");
+    }
+    if (const auto& s = in.Get(j, "subject"); !s.is_null())
+      r.subject = in.String(j, "subject");
+    r.protocol = in.String(j, "protocol");
+    const auto& amplitudes = in.Get(j, "amplitudes_deg");
+    if (!amplitudes.is_array())
+      throw std::runtime_error("'amplitudes_deg' must be an array");
+    for (const auto& a : amplitudes) {
+      if (!a.is_number()) throw std::runtime_error("'amplitudes_deg' must hold numbers");
+      r.amplitudes_deg.push_back(a.get<double>());
+    }
+    r.frequency_hz = in.Number(j, "frequency_hz");
+    r.repetitions = static_cast<int>(in.Integer(j, "repetitions", 0, 255));
+    r.rest_s = in.Number(j, "rest_s");
+    r.started_utc = in.String(j, "started_utc");
+    r.host = in.String(j, "host");
+    r.mjc = in.String(j, "mjc");
+    const auto& end = in.Get(j, "end");
+    Reader sub{"end."};
+    sub.Known(end, kEndKeys);
+    r.end.outcome = sub.String(end, "outcome");
+    if (std::find(std::begin(kRunOutcomes), std::end(kRunOutcomes), r.end.outcome) ==
+        std::end(kRunOutcomes)) {
+      throw std::runtime_error("'end.outcome' \"" + r.end.outcome + "\" is unknown");
+    }
+    if (const auto& f = sub.Get(end, "fault"); !f.is_null()) {
+      Reader fault{"end.fault."};
+      fault.Known(f, kFaultKeys);
+      r.end.fault_code = static_cast<int>(fault.Integer(f, "code", 0, 65535));
+      (void)fault.String(f, "name");
+    }
+    r.end.message = sub.String(end, "message");
+  } catch (const std::exception& e) {
+    *why = std::string("run.json: ") + e.what();
+    return std::nullopt;
+  }
+  return r;
+}
+
+void WriteRunRecord(const RunRecord& record, const std::filesystem::path& dir) {
+  WriteFile(dir / "run.json", RunRecordToJson(record).dump(2) + "\n");
+}
+
+std::optional<RunRecord> ReadRunRecord(const std::filesystem::path& dir,
+                                       std::string* why) {
+  why->clear();
+  const std::filesystem::path path = dir / "run.json";
+  std::error_code error;
+  if (!std::filesystem::exists(path, error)) return std::nullopt;
+  std::ifstream in(path);
+  nlohmann::json j;
+  try {
+    if (!in) throw std::runtime_error("cannot read it");
+    in >> j;
+  } catch (const std::exception& e) {
+    *why = path.string() + ": not valid JSON: " + e.what();
+    return std::nullopt;
+  }
+  auto record = RunRecordFromJson(j, why);
+  if (!record) *why = dir.string() + "/" + *why;
+  return record;
+}
+
+std::string RunTitle(const RunRecord& r) {
+  return "Energy loss per flexion: " + r.protocol + " protocol, node " +
+         std::to_string(r.node) + (r.subject ? ", subject " + *r.subject : "") + ", " +
+         r.started_utc;
+}
+
+std::string UtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
+
+std::string HostName() {
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) != 0 || name[0] == '\0') return "unknown";
+  return name;
+}
+
+OutputFolder PrepareOutputFolder(const std::string& requested, const std::string& base,
+                                 bool force, const std::vector<std::string>& outputs) {
+  namespace fs = std::filesystem;
+  OutputFolder out;
+  std::error_code error;
+  if (requested.empty()) {
+    // The run's start, in UTC like run.json's, with '-' for ':' (a file name on any
+    // system).
+    std::string stamp = UtcNow();
+    std::replace(stamp.begin(), stamp.end(), ':', '-');
+    out.path = fs::path(base) / stamp;
+    for (int n = 2; fs::exists(out.path, error); ++n) {
+      out.path = fs::path(base) / (stamp + "-" + std::to_string(n));
+    }
+    out.chosen = true;
+  } else {
+    out.path = requested;
+    if (fs::exists(out.path, error) && !fs::is_directory(out.path, error)) {
+      throw std::runtime_error(requested +
+                               " is a file, not a folder: a run never "
+                               "overwrites one; choose another --out");
+    }
+    if (fs::is_directory(out.path, error) && !fs::is_empty(out.path, error)) {
+      if (!force) {
+        std::vector<std::string> names;
+        for (const auto& entry : fs::directory_iterator(out.path, error)) {
+          names.push_back(entry.path().filename().string());
+        }
+        std::sort(names.begin(), names.end());
+        std::string held;
+        for (std::size_t i = 0; i < names.size() && i < 3; ++i) {
+          held += (i ? ", " : "") + names[i];
+        }
+        if (names.size() > 3) held += ", …";
+        throw std::runtime_error(requested + " is not empty (" + held +
+                                 "): a run never overwrites another; choose a new --out, "
+                                 "or add --force to replace its files");
+      }
+      for (const std::string& name : outputs) fs::remove(out.path / name, error);
+    }
+  }
+  fs::create_directories(out.path, error);
+  if (error) {
+    throw std::runtime_error("cannot create " + out.path.string() + ": " +
+                             error.message());
+  }
+  return out;
+}
+
+}  // namespace mjc::host

@@ -1,0 +1,123 @@
+#!/bin/bash
+# The tools in a lab's hands (run inside the VM by scripts/kernel-vm), against simulated
+# boards on vcan0: mjc list with two boards, then a third answering with node 2's id —
+# detected by list and monitor, refused by the commands that address it (exit 7); the
+# --json outputs read by jq; the command line's one-line errors; a trial's new output
+# folder, its run.json read back by mjc report, and an --out that would overwrite an
+# earlier run refused. Every wait is for an event (checks.sh); the boards keep real
+# time (--speed 1) and the tools' own waits follow the boards' clocks.
+# usage: lab_tools.sh <path of mjc>
+set -u
+mjc=$(realpath "$1")
+work=$(mktemp -d)
+. "$(dirname "$0")/checks.sh"
+cd "$work" || exit 1  # the default output folders (out/…) land here
+
+# One line on stderr and exit status STATUS: the refusal contract.
+refuses() {  # STATUS ERRFILE COMMAND...
+  local want=$1 err=$2 got
+  shift 2
+  "$@" >/dev/null 2>"$err"
+  got=$?
+  echo "exit $got (want $want): $(cat "$err")"
+  [ "$got" -eq "$want" ] && [ "$(wc -l <"$err")" -eq 1 ]
+}
+
+# The command line, before any board: one line each, exit 2.
+check "a mistyped command: one line, exit 2" refuses 2 typo.err "$mjc" calbrate
+check "  with a did-you-mean" \
+  grep -qx "mjc: unknown command 'calbrate' (did you mean 'calibrate'?)" typo.err
+check "a vector option's value out of range: one line, exit 2" \
+  refuses 2 range.err "$mjc" trial --amplitudes 6 100
+check "  naming the value and the range" \
+  grep -qx "mjc trial: --amplitudes: 100 is outside 1..90° (see mjc trial --help)" range.err
+build=$("$mjc" --version | sed -n 's/^mjc .* (build \([0-9a-f]\{8\}\)\(+dirty\)\{0,1\})$/\1/p')
+check "mjc --version names its build (${build:-?})" test -n "$build"
+echo '{"ifcae": "vcan0"}' >typo.json
+check "a config file with an unknown key: one line, exit 1" \
+  env MJC_CONFIG="$work/typo.json" bash -c "$(declare -f refuses); refuses 1 config.err '$mjc' list"
+check "  naming it and the key it resembles" \
+  grep -qx "mjc: $work/typo.json: unknown key 'ifcae' (did you mean 'iface'?)" config.err
+
+# Two boards: node 1 (the robot alone) and node 2 (a subject's hand donned).
+"$mjc" sim --iface vcan0 --node 1 2>sim1.err &
+sim1=$!
+"$mjc" sim --iface vcan0 --node 2 --subject subject1 2>sim2.err &
+sim2=$!
+check "board 1 comes up" wait_for sim1.err "mjc sim: node 1 on vcan0"
+check "board 2 comes up" wait_for sim2.err "mjc sim: node 2 on vcan0"
+"$mjc" list --iface vcan0 >list.out 2>list.err
+status=$?
+check "mjc list hears both boards (exit $status)" test "$status" -eq 0
+check "  node 1: application, its build, idle, uncalibrated, power-on" \
+  grep -qE "^ +1  application  $build(\+dirty)? .* idle +no +power-on" list.out
+check "  node 2 likewise" grep -qE "^ +2  application  $build" list.out
+"$mjc" list --iface vcan0 --json >list.json 2>>list.err
+check "mjc list --json: one object per node, read by jq" \
+  jq -se "length == 2 and map(.node) == [1, 2] and all(.[]; .ambiguous == false and .build == \"$build\" and .image == \"application\" and .state == \"idle\" and (.instance | test(\"^[0-9a-f]{4}$\")))" list.json
+
+# The plant's own slack (sim_host/params/default.json): node 2 calibrated, then a trial
+# into the default folder, with the interface from the environment.
+cat >cal.json <<'JSON'
+{"c_right_deg": 1.1001, "c_left_deg": -0.8995, "alpha": 1.0, "sea_stiffness_Nm_per_rad": 0.63, "joint_zero_count": 0}
+JSON
+check "node 2 takes a calibration" "$mjc" cal upload cal.json --iface vcan0 --node 2
+MJC_IFACE=vcan0 "$mjc" trial --node 2 --protocol amplitude --amplitudes 15 --reps 3 \
+  --frequency-hz 2 --rest-s 0.2 --subject S07 --no-figure >trial.out 2>trial.err
+status=$?
+check "a trial on MJC_IFACE's interface completes (exit $status)" test "$status" -eq 0
+dir=$(sed -n 's|^mjc trial: writing to \(out/trial/[0-9-]*T[0-9-]*Z\)/ (a new folder)$|\1|p' trial.err)
+check "  into a new timestamped folder, and says so (${dir:-none})" test -d "${dir:-/nonexistent}"
+check "  the progress counts repetitions from 1" grep -q "repetition 3/3 extension" trial.err
+check "  no empty line on stderr" sh -c "! grep -qx '' trial.err"
+check "run.json: the board, its calibration, the run and its end" \
+  jq -e ".node == 2 and .iface == \"vcan0\" and .board.build == \"$build\" and (.board.instance | test(\"^[0-9a-f]{4}$\")) and .board.reset_cause == \"power-on\" and .calibration.calibrated and (.calibration.c_right_deg - 1.1001 | fabs) < 1e-4 and .robot == null and .subject == \"S07\" and .protocol == \"amplitude\" and .amplitudes_deg == [15] and .frequency_hz == 2 and .repetitions == 3 and .rest_s == 0.2 and (.started_utc | test(\"^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}Z$\")) and (.host | length) > 0 and (.mjc | length) > 0 and .end.outcome == \"completed\" and .end.fault == null" \
+  "${dir:-.}/run.json"
+check "windows.csv: a version note, repetitions from 1, the analysed flexions marked" \
+  sh -c "head -n 1 '${dir:-.}/windows.csv' | grep -q '^# mjc windows.csv version 2' && grep -q '^1,15,3,flexion,2,1,' '${dir:-.}/windows.csv' && grep -q '^1,15,3,extension,3,0,' '${dir:-.}/windows.csv' && ! grep -q ',flexion,0,' '${dir:-.}/windows.csv'"
+"$mjc" report "${dir:-.}" --no-figure >report.out 2>report.err
+status=$?
+check "mjc report reads run.json (exit $status), guessing nothing" \
+  sh -c "test $status -eq 0 && ! grep -q 'guess' report.err && grep -q '^| 15° |' report.out"
+check "  the tables say what ± is" grep -q "Each energy: mean ± standard error of the mean" report.out
+check "  report.md names the board, the subject and the run" \
+  grep -q "^Node 2 on vcan0, board $build.*, subject S07; amplitude protocol, started " "${dir:-.}/report.md"
+cp "${dir:-.}/windows.csv" windows.before
+check "an --out that holds a run is refused, exit 1, before the bus" \
+  refuses 1 used.err "$mjc" trial --iface vcan0 --node 2 --out "${dir:-.}"
+check "  saying why and what to do" grep -q "is not empty (report.md, run.json, windows.csv): a run never overwrites another; .*--force" used.err
+check "  and the earlier run is untouched" cmp windows.before "${dir:-.}/windows.csv"
+
+# A third board answering with node 2's id.
+"$mjc" sim --iface vcan0 --node 2 2>sim3.err &
+sim3=$!
+check "a second board with node id 2 comes up" wait_for sim3.err "mjc sim: node 2 on vcan0"
+"$mjc" monitor --iface vcan0 --node 2 --node 1 --json --interval-ms 200 >monitor.json 2>monitor.err &
+monitor=$!
+"$mjc" list --iface vcan0 >list2.out 2>list2.err
+status=$?
+check "mjc list: two boards behind node 2, exit 7 (exit $status)" test "$status" -eq 7
+check "  saying so" grep -qE "^ +2  TWO BOARDS: node 2 is answered by two boards \(instances [0-9a-f]{4} and [0-9a-f]{4}\): give each its own node id" list2.out
+check "  node 1 is still listed" grep -qE "^ +1  application" list2.out
+"$mjc" list --iface vcan0 --json >list2.json 2>/dev/null
+check "mjc list --json marks node 2 ambiguous with both instances" \
+  jq -se 'map(select(.node == 2))[0] | .ambiguous and (.instances | length) == 2' list2.json
+check "a command on node 2 refuses: exit 7, one line" \
+  refuses 7 download.err "$mjc" cal download --iface vcan0 --node 2
+check "  naming both boards, nothing done" grep -q "^mjc cal download: node 2 is answered by two boards (.*): give each its own node id; nothing was done$" download.err
+"$mjc" trial --iface vcan0 --node 2 --out amb --no-figure >amb.out 2>amb.err
+status=$?
+check "a trial on node 2 refuses (exit $status)" test "$status" -eq 7
+check "  and its run.json says why" jq -e '.end.outcome == "ambiguous" and (.end.message | test("two boards"))' amb/run.json
+check "mjc monitor --json reports node 2 ambiguous" wait_for monitor.json '"ambiguous":true'
+check "  and node 1 live" jq -se 'any(.[]; .node == 1 and .heard and .state == "idle")' monitor.json
+kill -INT "$monitor"
+wait "$monitor"
+status=$?
+check "  and exits 7 (exit $status)" test "$status" -eq 7
+check "  every line is JSON with a UTC time" \
+  jq -se 'all(.[]; .time | test("^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:.]+Z$"))' monitor.json
+
+kill "$sim1" "$sim2" "$sim3" 2>/dev/null
+wait "$sim1" "$sim2" "$sim3" 2>/dev/null
+finish sim1.err sim2.err sim3.err

@@ -1,0 +1,85 @@
+// mjc list's scan against scripted frames: every node heard, each complete once its
+// clock has run a BoardInfo period and a tenth, two boards behind one id told apart.
+#include "mjc/host/bus_scan.h"
+
+#include <gtest/gtest.h>
+
+#include "mjc/protocol/codec.h"
+
+namespace {
+
+using namespace mjc;
+using namespace mjc::host;
+
+protocol::CanFrame Info(std::uint8_t node, std::uint16_t instance) {
+  protocol::BoardInfo info;
+  info.build = 0x1958ba84;
+  info.reset_cause = protocol::ResetCause::kPowerOn;
+  info.instance = instance;
+  return protocol::Encode(info, node);
+}
+
+protocol::CanFrame Beat(std::uint8_t node, std::uint32_t tick, bool calibrated = false) {
+  protocol::Heartbeat h;
+  h.tick = tick;
+  h.calibrated = calibrated;
+  return protocol::Encode(h, node);
+}
+
+TEST(BusScan, CompleteOnceEveryNodeHeardRanABoardInfoPeriodOfItsOwnTime) {
+  BusScan scan;
+  EXPECT_FALSE(scan.Complete());  // nothing heard yet
+  scan.Handle(Info(1, 0x3f2a));
+  scan.Handle(Beat(1, 50000, true));
+  scan.Handle(Beat(2, 7000));
+  scan.Handle(protocol::Encode(protocol::HostHeartbeat{1, 7}, 3));  // a host's: no node
+  // A BoardInfo period in ticks, heard in tenths of it.
+  const auto period = static_cast<std::uint32_t>(kBoardInfoPeriod.count()) *
+                      protocol::kBoardTickHz / 1000;
+  for (std::uint32_t t = period / 10; t <= period; t += period / 10) {
+    scan.Handle(Beat(1, 50000 + t, true));
+    scan.Handle(Beat(2, 7000 + t));
+  }
+  EXPECT_FALSE(scan.Complete());  // one period of their time: another may not have spoken
+  scan.Handle(Beat(1, 50000 + period + period / 5, true));
+  EXPECT_FALSE(scan.Complete());
+  scan.Handle(Info(2, 0x9b01));
+  scan.Handle(Beat(2, 7000 + period + period / 5));
+  EXPECT_TRUE(scan.Complete());
+  ASSERT_EQ(scan.nodes().size(), 2u);
+  const ScannedNode& one = scan.nodes().at(1);
+  EXPECT_FALSE(one.identity.ambiguous());
+  ASSERT_TRUE(one.identity.info());
+  EXPECT_EQ(one.identity.info()->instance, 0x3f2a);
+  EXPECT_TRUE(one.heartbeat->calibrated);
+  EXPECT_EQ(scan.nodes().count(3), 0u);
+}
+
+TEST(BusScan, TwoBoardsWithOneIdAreReported) {
+  BusScan scan;
+  for (std::uint32_t t = 0; t < 5000; t += 1000) {
+    if (t == 0) scan.Handle(Info(3, 0x1111));
+    scan.Handle(Beat(3, 90000 + t));
+    if (t == 2000) scan.Handle(Info(3, 0x2222));
+    scan.Handle(Beat(3, 90010 + t));
+  }
+  ASSERT_EQ(scan.nodes().count(3), 1u);
+  EXPECT_TRUE(scan.nodes().at(3).identity.ambiguous());
+  EXPECT_EQ(scan.nodes().at(3).identity.Message(3),
+            "node 3 is answered by two boards (instances 1111 and 2222): give each its "
+            "own node id");
+  EXPECT_TRUE(scan.Complete());  // nothing more to learn
+}
+
+TEST(BusScan, ABoardWithoutHeartbeatsIsShownByItsBoardInfo) {
+  // A bootloader, say: BoardInfo alone, once a second of its time.
+  BusScan scan;
+  scan.Handle(Info(4, 0x4444));
+  scan.Handle(Info(4, 0x4444));
+  EXPECT_FALSE(scan.Complete());
+  scan.Handle(Info(4, 0x4444));
+  EXPECT_TRUE(scan.Complete());
+  EXPECT_FALSE(scan.nodes().at(4).heartbeat);
+}
+
+}  // namespace
