@@ -29,15 +29,19 @@ set(MJC_QEMU_MPS2_COMMAND
 set(MJC_HEAP_SYMBOLS malloc _malloc_r calloc _calloc_r realloc _realloc_r _sbrk _sbrk_r
     _Znwj _Znaj _ZnwjRKSt9nothrow_t _ZnajRKSt9nothrow_t _ZnwjSt11align_val_t)
 
-# mjc_add_cm4_image(<name> SOURCES <src>... [LIBS <lib>...] [STDIO] [NO_HEAP] [NO_DOUBLE])
+# mjc_add_cm4_image(<name> SOURCES <src>... [LIBS <lib>...] [STDIO] [NO_HEAP] [NO_DOUBLE]
+#                   [SCRIPT <linker script>])
 #
 # Builds <name>.elf for mps2-an386 with a link map (<name>.map) and a size report
-# (<name>.size.txt, also printed). STDIO links newlib's semihosting syscalls (rdimon)
+# (<name>.size.txt, also printed), linked with SCRIPT (default linker/mps2_an386.ld). STDIO links newlib's semihosting syscalls (rdimon)
 # so printf works: test images only. NO_HEAP proves at link time that nothing can
 # allocate: every allocator entry is --wrap'ed to a symbol that does not exist, so a
 # reference anywhere fails the link, and the final image is checked with nm.
 function(mjc_add_cm4_image name)
-  cmake_parse_arguments(ARG "STDIO;NO_HEAP;NO_DOUBLE" "" "SOURCES;LIBS" ${ARGN})
+  cmake_parse_arguments(ARG "STDIO;NO_HEAP;NO_DOUBLE" "SCRIPT" "SOURCES;LIBS" ${ARGN})
+  if(NOT ARG_SCRIPT)
+    set(ARG_SCRIPT ${PROJECT_SOURCE_DIR}/linker/mps2_an386.ld)
+  endif()
   add_executable(${name} ${ARG_SOURCES} $<TARGET_OBJECTS:mjc_board_qemu_mps2>)
   set_target_properties(${name} PROPERTIES SUFFIX ".elf"
     CROSSCOMPILING_EMULATOR "${MJC_QEMU_MPS2_COMMAND}")
@@ -45,10 +49,9 @@ function(mjc_add_cm4_image name)
     $<TARGET_PROPERTY:mjc_board_qemu_mps2,INTERFACE_INCLUDE_DIRECTORIES>)
   target_link_libraries(${name} PRIVATE mjc_defaults ${ARG_LIBS})
   target_link_options(${name} PRIVATE
-    -T${PROJECT_SOURCE_DIR}/linker/mps2_an386.ld
+    -T${ARG_SCRIPT}
     -Wl,-Map=$<TARGET_FILE_DIR:${name}>/${name}.map -Wl,--print-memory-usage)
-  set_property(TARGET ${name} APPEND PROPERTY LINK_DEPENDS
-    ${PROJECT_SOURCE_DIR}/linker/mps2_an386.ld)
+  set_property(TARGET ${name} APPEND PROPERTY LINK_DEPENDS ${ARG_SCRIPT})
   if(ARG_STDIO)
     target_link_options(${name} PRIVATE --specs=rdimon.specs)
   else()
@@ -70,10 +73,43 @@ function(mjc_add_cm4_image name)
             -DSIZE=${CMAKE_SIZE} "-DFORBIDDEN=${forbidden}"
             -P ${PROJECT_SOURCE_DIR}/cmake/check_image.cmake
     VERBATIM)
+  if(ARG_APP_IMAGE)
+    mjc_package_app_image(${name} OUTPUT ${ARG_APP_IMAGE} BIN
+      $<TARGET_FILE_DIR:${name}>/${name}.bin BOARD_TYPE ${ARG_BOARD_TYPE}
+      HARDWARE ${ARG_HARDWARE})
+  endif()
+endfunction()
+
+# mjc_package_app_image(<target> OUTPUT <file> BIN <raw image> BOARD_TYPE <n>
+#                       HARDWARE <min> <max> [FLIPPED <file>])
+#
+# After <target> links, writes <file> in its directory: the image header
+# (firmware/bootloader/BOOTLOADER.md) and the raw image BIN (objcopy -O binary, from
+# the vector table on). The build id is this build's (mjc_build_id). FLIPPED also
+# writes a copy with one image byte inverted, for the bootloader's tests.
+function(mjc_package_app_image target)
+  cmake_parse_arguments(ARG "" "OUTPUT;BIN;BOARD_TYPE;FLIPPED" "HARDWARE" ${ARGN})
+  get_target_property(build_id_sources mjc_build_id SOURCES)
+  list(GET build_id_sources 0 build_id_cc)
+  add_dependencies(${target} mjc_build_id_update ${MJC_IMAGE_TOOL_TARGET})
+  set(flipped "")
+  if(ARG_FLIPPED)
+    set(flipped -DFLIPPED=$<TARGET_FILE_DIR:${target}>/${ARG_FLIPPED})
+  endif()
+  add_custom_command(TARGET ${target} POST_BUILD
+    COMMAND ${CMAKE_COMMAND} -DTOOL=${MJC_IMAGE_TOOL} -DNM=${CMAKE_NM}
+            -DELF=$<TARGET_FILE:${target}> -DBIN=${ARG_BIN}
+            -DOUT=$<TARGET_FILE_DIR:${target}>/${ARG_OUTPUT}
+            -DBUILD_ID_CC=${build_id_cc} -DBOARD_TYPE=${ARG_BOARD_TYPE}
+            "-DHARDWARE=${ARG_HARDWARE}" ${flipped}
+            -P ${PROJECT_SOURCE_DIR}/cmake/package_app_image.cmake
+    VERBATIM)
 endfunction()
 
 # mjc_add_g474_image(<name> SOURCES <src>... [LIBS <lib>...]
-#                    [FLASH_BUDGET <bytes>] [RAM_BUDGET <bytes>])
+#                    [FLASH_BUDGET <bytes>] [RAM_BUDGET <bytes>]
+#                    [SCRIPT <linker script>] [REPORT <symbol>...]
+#                    [APP_IMAGE <file> BOARD_TYPE <n> HARDWARE <min> <max>])
 #
 # An STM32G474 firmware image linked with linker/stm32g474.ld (the board's start-up code
 # is one of the SOURCES): <name>.elf, <name>.bin and <name>.hex (objcopy), <name>.map,
@@ -81,9 +117,13 @@ endfunction()
 # firmware images (as mjc_add_cm4_image's NO_HEAP NO_DOUBLE), and the budgets: the link
 # fails when the image's flash (code, constants, initial data) exceeds FLASH_BUDGET or
 # its RAM (SRAM and CCM, both stacks included) exceeds RAM_BUDGET (defaults 64 KB and
-# 32 KB; the linker script's ASSERTs).
+# 32 KB; the linker script's ASSERTs). SCRIPT replaces linker/stm32g474.ld (the
+# bootloader's own script), REPORT adds linker symbols to the printed figures, and
+# APP_IMAGE writes <file> beside the image: the application with its image header
+# (mjc_package_app_image).
 function(mjc_add_g474_image name)
-  cmake_parse_arguments(ARG "" "FLASH_BUDGET;RAM_BUDGET" "SOURCES;LIBS" ${ARGN})
+  cmake_parse_arguments(ARG "" "FLASH_BUDGET;RAM_BUDGET;SCRIPT;APP_IMAGE;BOARD_TYPE"
+                        "SOURCES;LIBS;REPORT;HARDWARE" ${ARGN})
   if(NOT ARG_FLASH_BUDGET)
     set(ARG_FLASH_BUDGET 65536)
   endif()
@@ -91,6 +131,9 @@ function(mjc_add_g474_image name)
     set(ARG_RAM_BUDGET 32768)
   endif()
   set(script ${PROJECT_SOURCE_DIR}/linker/stm32g474.ld)
+  if(ARG_SCRIPT)
+    set(script ${ARG_SCRIPT})
+  endif()
   add_executable(${name} ${ARG_SOURCES})
   set_target_properties(${name} PROPERTIES SUFFIX ".elf")
   target_link_libraries(${name} PRIVATE mjc_defaults ${ARG_LIBS})
@@ -107,7 +150,7 @@ function(mjc_add_g474_image name)
       __aeabi_f2d __aeabi_i2d __aeabi_d2iz __aeabi_l2d __aeabi_d2lz)
   # The linker script's figures, printed after every link.
   set(report __flash_used __flash_budget __ram_used __ram_budget __main_stack_size
-      __interrupt_stack_size)
+      __interrupt_stack_size ${ARG_REPORT})
   add_custom_command(TARGET ${name} POST_BUILD
     COMMAND ${CMAKE_OBJCOPY} -O binary $<TARGET_FILE:${name}>
             $<TARGET_FILE_DIR:${name}>/${name}.bin
@@ -117,5 +160,36 @@ function(mjc_add_g474_image name)
             -DSIZE=${CMAKE_SIZE} "-DFORBIDDEN=${forbidden}"
             "-DREPORT=${report}"
             -P ${PROJECT_SOURCE_DIR}/cmake/check_image.cmake
+    VERBATIM)
+  if(ARG_APP_IMAGE)
+    mjc_package_app_image(${name} OUTPUT ${ARG_APP_IMAGE} BIN
+      $<TARGET_FILE_DIR:${name}>/${name}.bin BOARD_TYPE ${ARG_BOARD_TYPE}
+      HARDWARE ${ARG_HARDWARE})
+  endif()
+endfunction()
+
+# mjc_package_app_image(<target> OUTPUT <file> BIN <raw image> BOARD_TYPE <n>
+#                       HARDWARE <min> <max> [FLIPPED <file>])
+#
+# After <target> links, writes <file> in its directory: the image header
+# (firmware/bootloader/BOOTLOADER.md) and the raw image BIN (objcopy -O binary, from
+# the vector table on). The build id is this build's (mjc_build_id). FLIPPED also
+# writes a copy with one image byte inverted, for the bootloader's tests.
+function(mjc_package_app_image target)
+  cmake_parse_arguments(ARG "" "OUTPUT;BIN;BOARD_TYPE;FLIPPED" "HARDWARE" ${ARGN})
+  get_target_property(build_id_sources mjc_build_id SOURCES)
+  list(GET build_id_sources 0 build_id_cc)
+  add_dependencies(${target} mjc_build_id_update ${MJC_IMAGE_TOOL_TARGET})
+  set(flipped "")
+  if(ARG_FLIPPED)
+    set(flipped -DFLIPPED=$<TARGET_FILE_DIR:${target}>/${ARG_FLIPPED})
+  endif()
+  add_custom_command(TARGET ${target} POST_BUILD
+    COMMAND ${CMAKE_COMMAND} -DTOOL=${MJC_IMAGE_TOOL} -DNM=${CMAKE_NM}
+            -DELF=$<TARGET_FILE:${target}> -DBIN=${ARG_BIN}
+            -DOUT=$<TARGET_FILE_DIR:${target}>/${ARG_OUTPUT}
+            -DBUILD_ID_CC=${build_id_cc} -DBOARD_TYPE=${ARG_BOARD_TYPE}
+            "-DHARDWARE=${ARG_HARDWARE}" ${flipped}
+            -P ${PROJECT_SOURCE_DIR}/cmake/package_app_image.cmake
     VERBATIM)
 endfunction()

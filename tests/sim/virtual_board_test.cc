@@ -5,12 +5,16 @@
 // 4 flash wait states (asked of the RCC, PWR and FLASH models); the tick's interrupt at
 // 10 kHz; FDCAN at 1 Mbit/s nominal and 5 Mbit/s data; the BoardInfo frame with this
 // build's commit, the power-on reset and the instance folded from the chip's unique ID.
+// The start is confirmed to the bootloader (the handoff block) after 2 s of ticks, not
+// before.
 #include "mjc/g474board/virtual_board.h"
 
 #include <gtest/gtest.h>
 
 #include <vector>
 
+#include "board.h"
+#include "mjc/boot/handoff.h"
 #include "mjc/build_id.h"
 #include "mjc/plant/params.h"
 #include "mjc/protocol/codec.h"
@@ -92,6 +96,21 @@ TEST(VirtualBoard, BootsAsOnTheChip) {
   board.Stop();
   EXPECT_TRUE(board.violations().empty()) << Violations(board);
   EXPECT_EQ(board.Summary().resets, 0);
+}
+
+TEST(VirtualBoard, ConfirmsAHealthyStartAfterTwoSeconds) {
+  // Two unconfirmed starts of this image so far, as the bootloader counts them.
+  constexpr std::uint32_t kImageCrc = 0x5EED1234u;
+  boot::SetBootAttempts(board::Handoff(), kImageCrc, 2);
+  g474board::VirtualBoard board(Config(plant::LoadPlantParams("default")), nullptr);
+
+  board.RunUntil(1.9);
+  EXPECT_EQ(boot::BootAttempts(board::Handoff(), kImageCrc), 2u);
+  board.RunUntil(2.1);
+  EXPECT_EQ(boot::BootAttempts(board::Handoff(), kImageCrc), 0u);
+  EXPECT_EQ(board::Handoff().attempts_magic, boot::kAttemptsMagic);
+  board.Stop();
+  EXPECT_TRUE(board.violations().empty()) << Violations(board);
 }
 
 }  // namespace

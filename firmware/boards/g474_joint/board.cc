@@ -137,12 +137,20 @@ void Run(const RunOptions& options) {
   stm32g4::EnableInterrupts();
 
   std::uint32_t last_tick = g_ticks.load(std::memory_order_acquire);
+  bool confirmed = false;
   for (;;) {
     // The watchdog is refreshed only while the tick also runs.
     const std::uint32_t tick = g_ticks.load(std::memory_order_acquire);
     if (tick != last_tick) {
       stm32g4::RefreshWatchdog();
       last_tick = tick;
+    }
+    // A healthy start, told to the bootloader once the tick and this loop have run for
+    // 2 s with the watchdog refreshed: until then a reset counts as a failed start, and
+    // after three the bootloader stays (firmware/bootloader).
+    if (!confirmed && tick >= kHealthyBootTicks) {
+      boot::ConfirmHealthyBoot(Handoff());
+      confirmed = true;
     }
     g_board->Poll();
     // Alive: the LED toggles every 5,000 ticks (1 Hz blink).

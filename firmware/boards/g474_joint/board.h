@@ -27,6 +27,7 @@
 #include "hal/stm32g4/joint_io.h"
 #include "hal/stm32g4/watchdog.h"
 #include "mjc/app/joint_board.h"
+#include "mjc/boot/handoff.h"
 #include "mjc/protocol/can_frame.h"
 #include "mjc/protocol/messages.h"
 #include "pins.h"
@@ -104,6 +105,17 @@ struct RunOptions {
 // CAL region): from the linker's symbol on the chip, from the same script's map on
 // the host.
 std::uint32_t CalibrationAddress();
+
+// The 32 bytes the bootloader and this image tell each other across a reset (the
+// linker script's HANDOFF region on the chip, 0x2001_3FE0; memory no reset of the
+// virtual chip touches on the host). Run() confirms a healthy start there
+// (boot::ConfirmHealthyBoot) once its tick and main loop have run 2 s.
+volatile boot::BootHandoff& Handoff();
+
+// The ticks (at 10 kHz) the tick and the main loop must run, the watchdog refreshed,
+// before Run() confirms a healthy start: until then a reset counts as a failed start, and
+// after three the bootloader stays (firmware/bootloader/BOOTLOADER.md).
+inline constexpr std::uint32_t kHealthyBootTicks = 20'000;
 
 // What a debugger would read in the board's RAM: the board once Run() has built it
 // (nullptr before), and what its boot found in flash. The virtual board reads them

@@ -40,6 +40,8 @@ extern std::uint32_t __main_stack_top[];
 extern const std::uint32_t __vector_table[];
 // The calibration pages' place in flash.
 extern const std::uint8_t __calibration_start[];
+// Shared with the bootloader across resets (the HANDOFF region).
+extern mjc::boot::BootHandoff __boot_handoff;
 
 void __libc_init_array();
 void _init() {}
@@ -73,6 +75,8 @@ std::uint32_t CalibrationAddress() {
   return static_cast<std::uint32_t>(
       reinterpret_cast<std::uintptr_t>(__calibration_start));
 }
+
+volatile boot::BootHandoff& Handoff() { return __boot_handoff; }
 
 }  // namespace mjc::board
 

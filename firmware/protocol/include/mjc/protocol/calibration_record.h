@@ -26,6 +26,7 @@
 #include "mjc/core/backlash.h"
 #include "mjc/core/control_tick.h"
 #include "mjc/core/quantities.h"
+#include "mjc/protocol/crc32.h"
 
 namespace mjc::protocol {
 
@@ -55,20 +56,6 @@ enum class CalibrationResult : std::uint8_t {
   kStorageFailed = 8,    // applied, but writing it to flash failed: not kept over a reset
   kRefusedBusy = 9,      // the previous calibration or parameter write is still pending
 };
-
-// CRC-32 (reflected polynomial 0xEDB88320, initial and final XOR 0xFFFFFFFF): the
-// zlib/Ethernet CRC. Written here because the firmware cannot link zlib; bitwise, so
-// it needs no table in flash (48 bytes a calibration upload).
-constexpr std::uint32_t Crc32(std::span<const std::uint8_t> data) {
-  std::uint32_t crc = 0xFFFFFFFFu;
-  for (const std::uint8_t byte : data) {
-    crc ^= byte;
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-    }
-  }
-  return crc ^ 0xFFFFFFFFu;
-}
 
 std::array<std::uint8_t, kCalibrationRecordSize> EncodeCalibration(
     const CalibrationRecord& r);

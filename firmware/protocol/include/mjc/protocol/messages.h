@@ -80,8 +80,15 @@ enum class Function : std::uint8_t {
   kHeartbeat = 0x30,
   kHostHeartbeat = 0x31,
   kBoardInfo = 0x32,
-  kIsoTpToBoard = 0x3E,    // ISO-TP channel host → board (calibration records)
-  kIsoTpFromBoard = 0x3F,  // ISO-TP channel board → host
+  // The bootloader (firmware/bootloader/BOOTLOADER.md).
+  kBootStatus = 0x38,          // bootloader → host: its state, why it stays, progress
+  kBootHold = 0x39,            // host → board: stay in (or enter) the bootloader
+  kBootCommand = 0x3A,         // host → bootloader: commit, boot, abort
+  kBootResult = 0x3B,          // bootloader → host: the outcome of a request
+  kBootIsoTpToBoard = 0x3C,    // ISO-TP host → bootloader: begin (the header), chunks
+  kBootIsoTpFromBoard = 0x3D,  // ISO-TP bootloader → host (flow control)
+  kIsoTpToBoard = 0x3E,        // ISO-TP channel host → board (calibration records)
+  kIsoTpFromBoard = 0x3F,      // ISO-TP channel board → host
 };
 
 enum class Sender : std::uint8_t { kBoard, kHost };
@@ -252,6 +259,98 @@ struct HostHeartbeat {
   SessionId session = 0;
 };
 
+// --- the bootloader's messages (firmware/bootloader/BOOTLOADER.md) -----------------
+
+// Where the bootloader is. Stable numbers.
+enum class BootState : std::uint8_t {
+  kHoldWindow = 1,  // a valid image boots unless a BootHold arrives (200 ms)
+  kReady = 2,       // staying, waiting for an update (a Begin)
+  kReceiving = 3,   // an update is in progress: chunks, then a commit
+  kCommitted = 4,   // the new image is in flash and checked: waiting for a boot
+};
+constexpr bool ValidEnumValue(BootState s) {
+  return static_cast<std::uint8_t>(s) >= 1 && static_cast<std::uint8_t>(s) <= 4;
+}
+
+// Why the bootloader stays instead of booting. Stable numbers.
+enum class StayReason : std::uint8_t {
+  kNone = 0,          // not staying (the hold window)
+  kNoValidImage = 1,  // the image check at reset failed (BootStatus.error: how)
+  kRequested = 2,     // the application asked for it before its reset
+  kHoldFrame = 3,     // a BootHold came within the hold window
+  kBootLoop = 4,      // the image reset 3 times without confirming a healthy start
+  kUpdate = 5,        // an update began: the previous image is no longer whole
+};
+constexpr bool ValidEnumValue(StayReason r) { return static_cast<std::uint8_t>(r) <= 5; }
+
+// Errors of the bootloader. Stable numbers, never renumbered; 1-8 are the image
+// checks (mjc::boot::ImageCheck, the same numbers).
+enum class BootError : std::uint8_t {
+  kNone = 0,
+  kNoImage = 1,            // no header: erased, or no magic
+  kBadHeader = 2,          // damaged: size, version, CRC, commit mark or reserved bits
+  kWrongBoard = 3,         // built for another board type
+  kWrongHardware = 4,      // this board's hardware revision is outside the image's range
+  kBadLength = 5,          // 0, not a multiple of 8, or larger than the region holds
+  kBadLoadAddress = 6,     // linked for another address than the application region's
+  kBadVectors = 7,         // initial stack pointer or reset vector implausible
+  kImageCrc = 8,           // the image in flash does not match the header's CRC
+  kNotReceiving = 16,      // a chunk or commit without a Begin
+  kUnexpectedOffset = 17,  // a chunk not at the next offset (BootResult.next_offset)
+  kBadChunk = 18,          // empty, not a multiple of 8 bytes, or past the image's end
+  kOutOfRegion = 19,       // an erase or program outside the application region
+  kFlashError = 20,        // the flash reported an error
+  kIncomplete = 21,        // a commit before every byte of the image arrived
+  kTransfer = 22,          // the ISO-TP transfer failed (sequence, timeout, overflow)
+  kBadRequest = 23,        // an unknown or malformed request
+  kNothingToBoot = 24,     // a boot request without a valid image
+};
+constexpr bool ValidEnumValue(BootError e) {
+  const auto v = static_cast<std::uint8_t>(e);
+  return v <= 8 || (v >= 16 && v <= 24);
+}
+
+// What a BootResult answers. Stable numbers.
+enum class BootRequest : std::uint8_t {
+  kHold = 1,    // BootHold
+  kBegin = 2,   // ISO-TP: the new image's header
+  kChunk = 3,   // ISO-TP: image bytes at an offset
+  kCommit = 4,  // BootCommand: check the image in flash, write its header
+  kBoot = 5,    // BootCommand: reset and start the image
+  kAbort = 6,   // BootCommand: drop an update in progress
+};
+constexpr bool ValidEnumValue(BootRequest r) {
+  return static_cast<std::uint8_t>(r) >= 1 && static_cast<std::uint8_t>(r) <= 6;
+}
+
+// The bootloader's heartbeat, every 100 ms and at each change. Its build is in the
+// BoardInfo it also sends (image = kBootloader). `tick_ms` is its own clock since its
+// start: the host bounds its waits by it.
+struct BootStatus {
+  BootState state = BootState::kReady;
+  StayReason reason = StayReason::kNone;
+  BootError error = BootError::kNone;   // the last error
+  std::uint16_t progress_permille = 0;  // of the image programmed (0..1000)
+  std::uint32_t tick_ms = 0;
+};
+// "Stay in the bootloader": in the hold window after a reset it makes the bootloader
+// stay; to a running application, it asks it to enter the bootloader. The key guards
+// against a frame meant for something else.
+inline constexpr std::uint32_t kBootHoldKey = 0x444C4F48u;  // "HOLD"
+struct BootHold {
+  std::uint32_t key = kBootHoldKey;
+};
+struct BootCommand {
+  BootRequest request = BootRequest::kCommit;  // kCommit, kBoot or kAbort
+  std::uint8_t sequence = 0;
+};
+struct BootResult {
+  BootRequest request = BootRequest::kBegin;
+  BootError error = BootError::kNone;
+  std::uint8_t sequence = 0;      // the request's
+  std::uint32_t next_offset = 0;  // the image offset the bootloader expects next
+};
+
 template <class M>
 struct Message;
 
@@ -342,6 +441,17 @@ MJC_MESSAGE(BoardInfo, kBoardInfo, 8, kBoard, MakeSignal("build", &T::build, 0, 
 MJC_MESSAGE(HostHeartbeat, kHostHeartbeat, 3, kHost,
             MakeSignal("sequence", &T::sequence, 0, 8),
             MakeSignal("session", &T::session, 8, 16));
+MJC_MESSAGE(BootStatus, kBootStatus, 8, kBoard, MakeSignal("state", &T::state, 0, 4),
+            MakeSignal("reason", &T::reason, 4, 4), MakeSignal("error", &T::error, 8, 8),
+            MakeSignal("progress_permille", &T::progress_permille, 16, 16, "1/1000"),
+            MakeSignal("tick_ms", &T::tick_ms, 32, 32, "ms"));
+MJC_MESSAGE(BootHold, kBootHold, 4, kHost, MakeSignal("key", &T::key, 0, 32));
+MJC_MESSAGE(BootCommand, kBootCommand, 2, kHost, MakeSignal("request", &T::request, 0, 8),
+            MakeSignal("sequence", &T::sequence, 8, 8));
+MJC_MESSAGE(BootResult, kBootResult, 8, kBoard, MakeSignal("request", &T::request, 0, 8),
+            MakeSignal("error", &T::error, 8, 8),
+            MakeSignal("sequence", &T::sequence, 16, 8),
+            MakeSignal("next_offset", &T::next_offset, 32, 32, "B"));
 
 #undef MJC_MESSAGE
 
@@ -351,7 +461,7 @@ using AllMessages =
                WindowHeader, WindowEnergy, WindowWork, WindowPeaks, WindowTicks,
                ParamWrite, ParamRead, ParamValue, TelemetryAngles, TelemetryTorque,
                TelemetryPower, TelemetryEnergy, TelemetryControl, Heartbeat, BoardInfo,
-               HostHeartbeat>;
+               HostHeartbeat, BootStatus, BootHold, BootCommand, BootResult>;
 
 namespace detail {
 template <class... M>
@@ -367,6 +477,7 @@ constexpr bool SentByBoardIn(std::uint8_t function, const std::tuple<M...>*) {
 // host's frame to it (another tool's command or heartbeat) is not.
 constexpr bool SentByBoard(std::uint8_t function) {
   return function == static_cast<std::uint8_t>(Function::kIsoTpFromBoard) ||
+         function == static_cast<std::uint8_t>(Function::kBootIsoTpFromBoard) ||
          detail::SentByBoardIn(function, static_cast<const AllMessages*>(nullptr));
 }
 static_assert(SentByBoard(static_cast<std::uint8_t>(Function::kHeartbeat)) &&

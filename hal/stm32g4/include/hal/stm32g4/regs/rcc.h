@@ -1,5 +1,5 @@
 // RCC: reset and clock control (RM0440 §7.4, "RCC registers"). Only what the clock
-// bring-up, the peripheral enables and the reset-cause report use.
+// bring-up, the peripheral enables and resets and the reset-cause report use.
 #pragma once
 
 #include "hal/stm32g4/regs/register_table.h"
@@ -26,6 +26,16 @@ inline constexpr FieldDef kPllcfgrFields[] = {
     {"PLLQ", 21, 2},    // 00 /2, 01 /4, 10 /6, 11 /8
     {"PLLREN", 24, 1},  //
     {"PLLR", 25, 2},    // 00 /2, 01 /4, 10 /6, 11 /8
+};
+// Peripheral resets: a bit held at 1 keeps its peripheral in reset (the bootloader
+// returns what it used to the reset state before it hands over).
+inline constexpr FieldDef kAhb2rstrFields[] = {
+    {"GPIOARST", 0, 1},
+    {"GPIOBRST", 1, 1},
+    {"GPIOCRST", 2, 1},
+};
+inline constexpr FieldDef kApb1rstr1Fields[] = {
+    {"FDCANRST", 25, 1},
 };
 inline constexpr FieldDef kAhb2enrFields[] = {
     {"GPIOAEN", 0, 1}, {"GPIOBEN", 1, 1}, {"GPIOCEN", 2, 1}, {"GPIODEN", 3, 1},
@@ -54,6 +64,8 @@ inline constexpr RegisterDef kRegisters[] = {
     {"CR", 0x00, kCrFields},
     {"CFGR", 0x08, kCfgrFields},
     {"PLLCFGR", 0x0C, kPllcfgrFields},
+    {"AHB2RSTR", 0x2C, kAhb2rstrFields},
+    {"APB1RSTR1", 0x38, kApb1rstr1Fields},
     {"AHB2ENR", 0x4C, kAhb2enrFields},
     {"APB1ENR1", 0x58, kApb1enr1Fields},
     {"APB2ENR", 0x60, kApb2enrFields},
@@ -68,6 +80,8 @@ inline constexpr Address kBase = kBlock.base;
 inline constexpr std::uint32_t kCr = OffsetOf(kBlock, "CR");
 inline constexpr std::uint32_t kCfgr = OffsetOf(kBlock, "CFGR");
 inline constexpr std::uint32_t kPllcfgr = OffsetOf(kBlock, "PLLCFGR");
+inline constexpr std::uint32_t kAhb2rstr = OffsetOf(kBlock, "AHB2RSTR");
+inline constexpr std::uint32_t kApb1rstr1 = OffsetOf(kBlock, "APB1RSTR1");
 inline constexpr std::uint32_t kAhb2enr = OffsetOf(kBlock, "AHB2ENR");
 inline constexpr std::uint32_t kApb1enr1 = OffsetOf(kBlock, "APB1ENR1");
 inline constexpr std::uint32_t kApb2enr = OffsetOf(kBlock, "APB2ENR");
@@ -100,6 +114,14 @@ inline constexpr Field kPllq = FieldOf(kBlock, "PLLCFGR", "PLLQ");
 inline constexpr Field kPllren = FieldOf(kBlock, "PLLCFGR", "PLLREN");
 inline constexpr Field kPllr = FieldOf(kBlock, "PLLCFGR", "PLLR");
 }  // namespace pllcfgr
+namespace ahb2rstr {
+inline constexpr Field kGpioarst = FieldOf(kBlock, "AHB2RSTR", "GPIOARST");
+inline constexpr Field kGpiobrst = FieldOf(kBlock, "AHB2RSTR", "GPIOBRST");
+inline constexpr Field kGpiocrst = FieldOf(kBlock, "AHB2RSTR", "GPIOCRST");
+}  // namespace ahb2rstr
+namespace apb1rstr1 {
+inline constexpr Field kFdcanrst = FieldOf(kBlock, "APB1RSTR1", "FDCANRST");
+}  // namespace apb1rstr1
 namespace ahb2enr {
 inline constexpr Field kGpioaen = FieldOf(kBlock, "AHB2ENR", "GPIOAEN");
 inline constexpr Field kGpioben = FieldOf(kBlock, "AHB2ENR", "GPIOBEN");
