@@ -5,7 +5,9 @@
 #include <cmath>
 #include <cstdarg>
 #include <exception>
+#include <filesystem>
 #include <numeric>
+#include <stdexcept>
 
 #include "board.h"
 #include "hal/stm32g4/mmio.h"
@@ -84,6 +86,21 @@ Picoseconds BusTime(const g474model::CanBusFrame& f, double nominal, double data
 
 VirtualBoard::VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link)
     : config_(config), link_(link) {
+  // The FLASH model takes a file of exactly its array's size and writes the whole array
+  // back at every erase and program: any other file (mjc sim's flash file is two
+  // pages) is refused here, before the model could overwrite it.
+  if (!config_.flash_path.empty() && std::filesystem::exists(config_.flash_path)) {
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(config_.flash_path, error);
+    if (error || size != g474model::Flash::kSize) {
+      throw std::runtime_error(
+          config_.flash_path + ": " +
+          (error ? error.message()
+                 : std::to_string(size) + " bytes, not a G474 flash file (" +
+                       std::to_string(g474model::Flash::kSize) + " bytes)") +
+          "; left as it is");
+    }
+  }
   g474model::ChipConfig chip;
   chip.rcc.hse_hz = kCrystalHz;
   chip.flash.path = config_.flash_path;
@@ -92,9 +109,20 @@ VirtualBoard::VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link
   plant_ = std::make_unique<plant::Plant>(config_.plant);
   last_motor_count_ = plant_->MotorCount();
 
-  // The image's vector table, as the chip's handlers: each entry on its IRQ line.
-  for (const auto& entry : board::kDriverIrqs)
-    chip_->SetHandler(entry.irq, entry.handler);
+  // The image's vector table, as the chip's handlers: each entry on its IRQ line. The
+  // tick's entry is counted: the firmware's board in RAM is the one this start built
+  // only once its tick has run (Run() enables the tick after building it; until then
+  // board::Instance() may be the one from before a reset, which nothing zeroes here).
+  for (const auto& entry : board::kDriverIrqs) {
+    if (entry.irq == stm32g4::irq::kTim1Update) {
+      chip_->SetHandler(entry.irq, [this, handler = entry.handler] {
+        ++ticks_since_start_;
+        handler();
+      });
+    } else {
+      chip_->SetHandler(entry.irq, entry.handler);
+    }
+  }
   chip_->AttachEncoder(kEncoderA, kEncoderB);
   chip_->AttachAs5047p(kJointEncoder).SetAngleSource([this] {
     return JointSample(plant_->JointFrame());
@@ -150,7 +178,7 @@ void VirtualBoard::StepEvent() {
   }
   duty_ = drive.duty;  // loaded at this update: driven until the next one
   if (step_observer_) {
-    const app::JointBoard* fw = board::Instance();
+    const app::JointBoard* fw = Booted();
     step_observer_(*plant_, fw == nullptr ? 0 : fw->app().last().telemetry.tick + 1);
   }
   // The next update event of TIM1 (the next change of the duty it outputs, and the
@@ -258,8 +286,12 @@ void VirtualBoard::DrainViolations() {
   log.Clear();
 }
 
+const app::JointBoard* VirtualBoard::Booted() const {
+  return ticks_since_start_ == 0 ? nullptr : board::Instance();
+}
+
 void VirtualBoard::Report() {
-  const app::JointBoard* fw = board::Instance();
+  const app::JointBoard* fw = Booted();
   if (fw == nullptr || fw->app().last().telemetry.tick == 0) return;
   if (!boot_reported_) {
     boot_reported_ = true;
@@ -357,6 +389,7 @@ void VirtualBoard::FirmwareThread() {
       board::Run(options);
     } catch (const g474model::ChipReset& reset) {
       ++resets_;
+      ticks_since_start_ = 0;
       boot_reported_ = false;
       bus_off_reported_ = 0;
       Say("reset (%s) at %.4f s: the firmware starts again from its entry",
@@ -436,7 +469,7 @@ void VirtualBoard::Post(std::function<void()> fn) {
 
 // ── Views ─────────────────────────────────────────────────────────────────────────
 
-const app::JointBoard* VirtualBoard::firmware() const { return board::Instance(); }
+const app::JointBoard* VirtualBoard::firmware() const { return Booted(); }
 
 double VirtualBoard::now_s() const { return Seconds(chip_->now()); }
 
@@ -462,7 +495,7 @@ VirtualBoardSummary VirtualBoard::Summary() const {
   s.send_failures = send_failures_;
   s.frames_delivered = frames_delivered_;
   s.frames_unheard = frames_unheard_;
-  if (const app::JointBoard* fw = board::Instance()) s.counters = fw->node().counters();
+  if (const app::JointBoard* fw = Booted()) s.counters = fw->node().counters();
   s.resets = resets_;
   s.violations = total_violations_;
   s.error = error_;

@@ -65,8 +65,9 @@ namespace mjc::g474board {
 struct VirtualBoardConfig {
   plant::PlantParams plant;
   std::uint8_t node = 1;
-  // The FLASH model's array is loaded from and saved to this file ("" = none): the
-  // calibration survives a restart of the program.
+  // The FLASH model's array is loaded from and saved to this file ("" = none; created
+  // when missing): the calibration survives a restart of the program. An existing file
+  // of another size is refused (the constructor throws), never overwritten.
   std::string flash_path;
   // The chip's unique device ID (RM0440 §48.1), three words as the factory wrote them.
   std::array<std::uint32_t, 3> unique_id = {0x00400031u, 0x4E4B5003u, 0x20343736u};
@@ -100,7 +101,8 @@ class VirtualBoard {
  public:
   // `link` (may be null: no bus) must outlive the board. Builds the chip (its clocks,
   // its flash from the file) and the plant; the firmware starts at the first RunUntil
-  // or Resume, from power-on.
+  // or Resume, from power-on. Throws std::runtime_error, saying why, when the flash
+  // file cannot be used.
   VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link);
   ~VirtualBoard();
   VirtualBoard(const VirtualBoard&) = delete;
@@ -133,7 +135,7 @@ class VirtualBoard {
   // ── Views (only while halted or stopped) ──────────────────────────────────────
   g474model::VirtualChip& chip() { return *chip_; }
   plant::Plant& plant() { return *plant_; }
-  // The firmware's board in its RAM (nullptr before it has booted).
+  // The firmware's board in its RAM (nullptr before this start's first tick).
   const app::JointBoard* firmware() const;
   double now_s() const;
   // Every violation the run has seen, in order (the chip's log is drained into it).
@@ -158,6 +160,8 @@ class VirtualBoard {
   void OnTransmit(const g474model::CanBusFrame& frame);
   void DrainViolations();
   void Report();
+  // The firmware's board once this start's tick has run, else nullptr.
+  const app::JointBoard* Booted() const;
   void Say(const char* format, ...) __attribute__((format(printf, 2, 3)));
   double Seconds(g474model::Picoseconds t) const;
 
@@ -183,6 +187,7 @@ class VirtualBoard {
   bool boot_reported_ = false;
   std::uint32_t bus_off_reported_ = 0;
   int resets_ = 0;
+  std::uint64_t ticks_since_start_ = 0;  // tick interrupts since the last (re)start
   std::function<void(const plant::Plant&, std::uint32_t)> step_observer_;
   std::atomic<int> joint_error_request_{0};
   // Pacing.
