@@ -167,29 +167,3 @@ function(mjc_add_g474_image name)
       HARDWARE ${ARG_HARDWARE})
   endif()
 endfunction()
-
-# mjc_package_app_image(<target> OUTPUT <file> BIN <raw image> BOARD_TYPE <n>
-#                       HARDWARE <min> <max> [FLIPPED <file>])
-#
-# After <target> links, writes <file> in its directory: the image header
-# (firmware/bootloader/BOOTLOADER.md) and the raw image BIN (objcopy -O binary, from
-# the vector table on). The build id is this build's (mjc_build_id). FLIPPED also
-# writes a copy with one image byte inverted, for the bootloader's tests.
-function(mjc_package_app_image target)
-  cmake_parse_arguments(ARG "" "OUTPUT;BIN;BOARD_TYPE;FLIPPED" "HARDWARE" ${ARGN})
-  get_target_property(build_id_sources mjc_build_id SOURCES)
-  list(GET build_id_sources 0 build_id_cc)
-  add_dependencies(${target} mjc_build_id_update ${MJC_IMAGE_TOOL_TARGET})
-  set(flipped "")
-  if(ARG_FLIPPED)
-    set(flipped -DFLIPPED=$<TARGET_FILE_DIR:${target}>/${ARG_FLIPPED})
-  endif()
-  add_custom_command(TARGET ${target} POST_BUILD
-    COMMAND ${CMAKE_COMMAND} -DTOOL=${MJC_IMAGE_TOOL} -DNM=${CMAKE_NM}
-            -DELF=$<TARGET_FILE:${target}> -DBIN=${ARG_BIN}
-            -DOUT=$<TARGET_FILE_DIR:${target}>/${ARG_OUTPUT}
-            -DBUILD_ID_CC=${build_id_cc} -DBOARD_TYPE=${ARG_BOARD_TYPE}
-            "-DHARDWARE=${ARG_HARDWARE}" ${flipped}
-            -P ${PROJECT_SOURCE_DIR}/cmake/package_app_image.cmake
-    VERBATIM)
-endfunction()

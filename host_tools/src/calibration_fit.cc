@@ -236,6 +236,9 @@ std::optional<std::string> CheckOptions(const BacklashFitOptions& o) {
     return "options.min_engaged_fraction = " + Number(o.min_engaged_fraction, 4) +
            " is outside the legal range (0, 0.5]";
   }
+  if (!positive(o.max_rms_error_rad)) {
+    return "options.max_rms_error_rad must be finite and > 0";
+  }
   if (o.fit_lag && !positive(o.sample_rate_hz)) {
     return "options.fit_lag needs sample_rate_hz > 0 (the record's sample rate)";
   }
@@ -457,6 +460,20 @@ BacklashFit FitBacklash(std::span<const double> motor_rad,
                         Number(options.alpha_max, 4) + "]: " + summary +
                         ". Widen alpha_min/alpha_max or check the pulley ratio");
     }
+  }
+
+  // A residual far above what the joint encoder resolves: whatever the optimiser found,
+  // the record is not a play operator's (a joint held or stuck, an encoder slipping or
+  // misread, a wrong α), and uploading it would make every later torque wrong.
+  if (fit.rms_error_rad > options.max_rms_error_rad) {
+    return finish(BacklashFitStatus::kRefusedInput,
+                  "the residual " + Degrees(fit.rms_error_rad) +
+                      " RMS is above the limit " + Degrees(options.max_rms_error_rad) +
+                      " (max_rms_error_rad): the joint does not follow the modelled "
+                      "cable: " +
+                      summary +
+                      ". Check that the joint moves freely, the encoders and "
+                      "the pulley ratio");
   }
 
   const std::string how =

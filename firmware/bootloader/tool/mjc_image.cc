@@ -8,6 +8,12 @@
 //             --describe TEXT [--flip-byte OFFSET]
 //   mjc-image show FILE [--board-type N --hardware-revision R --load-address ADDR
 //             --max-length BYTES]
+//   mjc-image identity OUT.bin --node N --revision R
+//
+// `identity` writes a new board's identity pages (node id 1..8, hardware revision
+// 1..255; 4,096 bytes for flash at 0x0807E000, pages 252-253) with the bootloader's own
+// IdentityStore, for the first flash through the debug connector (scripts/first-flash):
+// every board on a bus needs a node id of its own, and updates never touch these pages.
 //
 // --flip-byte exists for the bootloader's tests: it inverts one byte of the image after
 // the header was computed, giving a file whose CRC does not match.
@@ -21,7 +27,9 @@
 #include <string>
 #include <vector>
 
+#include "hal/flash.h"
 #include "image_file.h"
+#include "mjc/boot/identity_store.h"
 
 namespace {
 
@@ -34,7 +42,8 @@ using namespace mjc::boot;
                "MAX --load-address ADDR --commit HEX --dirty 0|1 --commit-time S "
                "--describe TEXT [--flip-byte OFFSET]\n"
                "       mjc-image show FILE [--board-type N --hardware-revision R "
-               "--load-address ADDR --max-length BYTES]\n",
+               "--load-address ADDR --max-length BYTES]\n"
+               "       mjc-image identity OUT.bin --node N --revision R\n",
                why);
   std::exit(2);
 }
@@ -178,6 +187,69 @@ int Show(const Args& a) {
   return check == ImageCheck::kValid ? 0 : 1;
 }
 
+// Two erased flash pages in memory: the identity pages as the board's flash will hold
+// them, written through the same IdentityStore the bootloader reads them with.
+class PagesInMemory final : public mjc::hal::Flash {
+ public:
+  std::vector<std::uint8_t> bytes = std::vector<std::uint8_t>(2 * kPageSize, 0xFF);
+
+ private:
+  mjc::hal::FlashResult DoErasePage(std::uint32_t page) override {
+    if (page >= 2) return mjc::hal::FlashResult::kBadAddress;
+    std::memset(bytes.data() + page * kPageSize, 0xFF, kPageSize);
+    return mjc::hal::FlashResult::kOk;
+  }
+  mjc::hal::FlashResult DoProgram(std::uint32_t page, std::uint32_t offset,
+                                  std::uint64_t value) override {
+    if (page >= 2 || offset % kDoubleWord != 0 || offset >= kPageSize) {
+      return mjc::hal::FlashResult::kBadAddress;
+    }
+    std::uint8_t* at = bytes.data() + page * kPageSize + offset;
+    for (std::size_t i = 0; i < kDoubleWord; ++i) {
+      if (at[i] != 0xFF) return mjc::hal::FlashResult::kNotErased;
+    }
+    for (std::size_t i = 0; i < kDoubleWord; ++i) {
+      at[i] = static_cast<std::uint8_t>(value >> (8 * i));
+    }
+    return mjc::hal::FlashResult::kOk;
+  }
+  mjc::hal::FlashResult DoRead(std::uint32_t page, std::uint32_t offset,
+                               std::span<std::uint8_t> out) const override {
+    if (page >= 2 || offset + out.size() > kPageSize) {
+      return mjc::hal::FlashResult::kBadAddress;
+    }
+    std::memcpy(out.data(), bytes.data() + page * kPageSize + offset, out.size());
+    return mjc::hal::FlashResult::kOk;
+  }
+  std::uint32_t DoPageCount() const override { return 2; }
+};
+
+int Identity(const Args& a) {
+  if (a.positional.size() != 1) Usage("identity takes OUT.bin");
+  BoardIdentity id;
+  id.node = static_cast<std::uint8_t>(Number(a.One("--node"), 8));
+  id.hardware_revision = static_cast<std::uint8_t>(Number(a.One("--revision"), 255));
+  if (id.node < 1 || id.hardware_revision < 1) {
+    Usage("--node is 1..8 and --revision 1..255");
+  }
+  PagesInMemory pages;
+  IdentityStore store(&pages, 0, 1);
+  const auto loaded = store.Save(id) == IdentityResult::kOk ? store.Load() : std::nullopt;
+  if (!loaded || loaded->identity.node != id.node ||
+      loaded->identity.hardware_revision != id.hardware_revision) {
+    std::fprintf(stderr, "mjc-image: the identity record did not read back\n");
+    return 2;
+  }
+  if (!WriteAll(a.positional[0], pages.bytes)) {
+    std::fprintf(stderr, "mjc-image: cannot write %s: %s\n", a.positional[0].c_str(),
+                 std::strerror(errno));
+    return 2;
+  }
+  std::printf("mjc-image: %s: identity pages, node %u, hardware revision %u\n",
+              a.positional[0].c_str(), id.node, id.hardware_revision);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -186,5 +258,6 @@ int main(int argc, char** argv) {
   const Args args = Parse(argc, argv, 2);
   if (command == "pack") return Pack(args);
   if (command == "show") return Show(args);
+  if (command == "identity") return Identity(args);
   Usage(("unknown command '" + command + "'").c_str());
 }

@@ -5,7 +5,8 @@
 
 namespace mjc::g474model {
 namespace {
-// Message RAM layout of one instance (g474-notes §2.1, ST HAL SRAMCAN_*).
+// Message RAM layout of one instance (RM0440 "FDCAN message RAM"; ST HAL
+// stm32g4xx_hal_fdcan.c, SRAMCAN_*).
 constexpr std::uint32_t kFlssa = 0x000, kFlesa = 0x070, kRf0sa = 0x0B0, kRf1sa = 0x188,
                         kTefsa = 0x260, kTfqsa = 0x278, kElement = 72;
 constexpr std::uint32_t kInit = 1u << 0, kCce = 1u << 1, kCsa = 1u << 3, kCsr = 1u << 4;

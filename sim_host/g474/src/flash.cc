@@ -48,7 +48,7 @@ void Flash::Reset() {
   acr_ = 0x00040601u;
   sr_ = 0;
   cr_ = kLock | kOptlock;
-  optr_ = 0xFFEFF8AAu;  // factory option bytes (g474-notes §2.7): DBANK = 1
+  optr_ = 0xFFEFF8AAu;  // factory option bytes (RM0440 FLASH_OPTR reset value): DBANK = 1
   // WRP areas as the factory option bytes leave them: start > end, no protection.
   for (auto& w : wrp_) w = 0x0000007Fu;
   key_stage_ = optkey_stage_ = 0;

@@ -1,44 +1,24 @@
-// Power cuts against the calibration store: at every operation of an update (the
-// erase and each double-word program), with random garbage where the cut falls, and at
-// thousands of random points over long sequences of updates. After every "reboot" the
-// board must load either the last record whose save completed or the one being saved —
-// never a corrupt one, never nothing once something was saved. Each power-cut test
-// prints its points tried and records lost ("powercut_<kind>_points: N"); ./bench sums
-// them.
+// The calibration store: saves alternate pages, a corrupt page is ignored, the record
+// persists in the simulated flash's file, and power cuts at every operation of an
+// update and at thousands of random points lose nothing (the sweeps are in
+// calibration_powercut_rig.h; ./bench's powercut_* figures come from the same sweeps,
+// tests/bench/calibration_powercut.cc).
 #include "mjc/app/calibration_store.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <random>
 
+#include "calibration_powercut_rig.h"
 #include "hal/sim/sim_flash.h"
 
 namespace {
 
 using namespace mjc;
+using namespace mjc::calibration_powercut;
 using mjc::app::CalibrationStore;
 using mjc::app::StoreResult;
 using mjc::hal::SimFlash;
-
-protocol::CalibrationRecord Record(int i) {
-  protocol::CalibrationRecord r;
-  r.backlash.c_right = Angle::FromRaw(300000 + i * 17);
-  r.backlash.c_left = Angle::FromRaw(-250000 - i * 13);
-  r.sea_stiffness = Stiffness::FromRaw(10569646 + i);
-  r.joint_zero_count = static_cast<std::uint16_t>(i % 16384);
-  r.fitted_at_unix_s = 1790000000u + static_cast<std::uint64_t>(i);
-  return r;
-}
-
-bool Same(const protocol::CalibrationRecord& a, const protocol::CalibrationRecord& b) {
-  return a.backlash.c_right == b.backlash.c_right &&
-         a.backlash.c_left == b.backlash.c_left && a.sea_stiffness == b.sea_stiffness &&
-         a.joint_zero_count == b.joint_zero_count &&
-         a.fitted_at_unix_s == b.fitted_at_unix_s;
-}
-
-constexpr std::uint32_t kPageA = 3, kPageB = 7;
 
 TEST(CalibrationStore, SavesLoadsAndAlternatesPages) {
   SimFlash flash(8);
@@ -54,55 +34,21 @@ TEST(CalibrationStore, SavesLoadsAndAlternatesPages) {
   }
 }
 
-// Starting from `history` completed saves, cuts power at operation `cut` of the next
-// save; returns true when the reboot loads the last completed record or the new one.
-bool SurvivesCut(int history, long cut, std::uint64_t seed, bool* got_new) {
-  SimFlash flash(8);
-  CalibrationStore store(&flash, kPageA, kPageB);
-  for (int i = 0; i < history; ++i) {
-    if (store.Save(Record(i)) != StoreResult::kOk) return false;
-  }
-  flash.CutPowerAfter(cut, seed);
-  const StoreResult result = store.Save(Record(history));
-  flash.PowerOn();
-  const auto loaded = CalibrationStore(&flash, kPageA, kPageB).Load();
-  *got_new = loaded && Same(loaded->record, Record(history));
-  if (result == StoreResult::kOk) return *got_new;  // the cut came after the save
-  if (history == 0) return !loaded || *got_new;     // nothing before: nothing or the new
-  return loaded && (*got_new || Same(loaded->record, Record(history - 1)));
-}
-
 TEST(CalibrationStore, PowerCutAtEveryStepOfAnUpdate) {
-  // One update is 10 operations: an erase and 9 double-word programs.
-  int points = 0, lost = 0, completed_new = 0;
-  for (int history : {0, 1, 2}) {  // erased flash, one valid page, both pages valid
-    for (long cut = 0; cut <= 10; ++cut) {
-      for (std::uint64_t seed = 1; seed <= 8; ++seed) {
-        bool got_new = false;
-        ++points;
-        if (!SurvivesCut(history, cut, seed, &got_new)) ++lost;
-        if (got_new) ++completed_new;
-      }
-    }
-  }
-  EXPECT_EQ(lost, 0);
+  const Sweep sweep = EveryStep();
+  EXPECT_EQ(sweep.points, 3 * 11 * 8);
+  EXPECT_EQ(sweep.lost, 0);
   // The new record appears only when the cut spared the last program (cut = 10: none).
-  EXPECT_EQ(completed_new, 3 * 8);
-  std::printf("powercut_step_points: %d\npowercut_step_lost: %d\n", points, lost);
+  EXPECT_EQ(sweep.completed_new, 3 * 8);
 }
 
 TEST(CalibrationStore, PowerCutAtThousandsOfRandomPoints) {
-  std::mt19937_64 rng(0xC0FFEE);
-  int points = 0, lost = 0;
-  for (int trial = 0; trial < 2000; ++trial) {
-    const int history = static_cast<int>(rng() % 6);
-    const long cut = static_cast<long>(rng() % 11);
-    bool got_new = false;
-    ++points;
-    if (!SurvivesCut(history, cut, rng(), &got_new)) ++lost;
-  }
-  EXPECT_EQ(lost, 0);
-  std::printf("powercut_random_points: %d\npowercut_random_lost: %d\n", points, lost);
+  const Sweep sweep = RandomPoints();
+  EXPECT_EQ(sweep.points, 2000);
+  EXPECT_EQ(sweep.lost, 0);
+  // Some cuts came after the save's last operation, and some before it.
+  EXPECT_GT(sweep.completed_new, 0);
+  EXPECT_LT(sweep.completed_new, sweep.points);
 }
 
 TEST(CalibrationStore, CorruptPagesAreIgnoredNotLoaded) {
@@ -128,19 +74,7 @@ TEST(CalibrationStore, CorruptPagesAreIgnoredNotLoaded) {
   EXPECT_TRUE(Same(loaded->record, Record(1)));
 }
 
-TEST(SimFlash, FollowsTheG4Rules) {
-  SimFlash flash(2);
-  EXPECT_EQ(flash.ProgramDoubleWord(0, 4, 1),
-            hal::FlashResult::kBadAddress);  // unaligned
-  EXPECT_EQ(flash.ProgramDoubleWord(2, 0, 1),
-            hal::FlashResult::kBadAddress);  // no page 2
-  EXPECT_EQ(flash.ProgramDoubleWord(0, 0, 1), hal::FlashResult::kOk);
-  EXPECT_EQ(flash.ProgramDoubleWord(0, 0, 0), hal::FlashResult::kNotErased);  // twice
-  EXPECT_EQ(flash.ErasePage(0), hal::FlashResult::kOk);
-  EXPECT_EQ(flash.ProgramDoubleWord(0, 0, 0), hal::FlashResult::kOk);
-}
-
-TEST(SimFlash, PersistsToItsFile) {
+TEST(CalibrationStore, PersistsInTheSimulatedFlashsFile) {
   const std::string path = ::testing::TempDir() + "/mjc_flash_test.bin";
   std::remove(path.c_str());
   {

@@ -165,23 +165,6 @@ MJC_VECTOR_TEST(JointApp, ConfigurationRefusedUnlessIdle) {
   VT_EXPECT_TRUE(app.Configure(ControlConfig{}).result == CommandOutcomeCode::kAccepted);
 }
 
-// The main loop's copy of what the tick left: the tick interrupting the copy is stood
-// for by copy functions that advance the count themselves.
-MJC_VECTOR_TEST(TickCount, ACopyATickInterruptedIsTakenAgain) {
-  TickCount count;
-  int copies = 0;
-  VT_EXPECT_EQ(count.Read([&] { return ++copies; }), 1);  // undisturbed: one copy
-  copies = 0;
-  const int kept = count.Read([&] {
-    ++copies;
-    if (copies <= 2) count.ISR_Advance();  // a tick during the first two copies
-    return copies;
-  });
-  VT_EXPECT_EQ(kept, 3);
-  VT_EXPECT_EQ(copies, 3);
-  VT_EXPECT_EQ(count.ticks(), 2u);
-}
-
 MJC_VECTOR_TEST(JointApp, LatestIsWhatTheLastTickLeft) {
   MJC_FRESH_APP(app);
   ScriptedIo io;
@@ -213,19 +196,6 @@ MJC_VECTOR_TEST(JointApp, LatestIsWhatTheLastTickLeft) {
   VT_EXPECT_TRUE(app.Latest().state == BoardState::kFault &&
                  !app.Latest().bridge_enabled);
   VT_EXPECT_TRUE(app.Latest().telemetry.fault == Fault::kJointParity);
-}
-
-MJC_VECTOR_TEST(SpscQueue, FullQueueDropsAndCounts) {
-  SpscQueue<int, 4> q;
-  for (int i = 0; i < 4; ++i) VT_EXPECT_TRUE(q.Push(i));
-  VT_EXPECT_TRUE(!q.Push(99));
-  VT_EXPECT_EQ(q.dropped(), 1u);
-  int v = -1;
-  for (int i = 0; i < 4; ++i) {
-    VT_EXPECT_TRUE(q.Pop(&v));
-    VT_EXPECT_EQ(v, i);
-  }
-  VT_EXPECT_TRUE(!q.Pop(&v));
 }
 
 }  // namespace

@@ -1,29 +1,22 @@
 // The board identity record (node id, hardware revision) in its A/B pages: saves
 // alternate, damaged pages are ignored, and a power cut at every operation of a save
-// and at 2,000 random points leaves the old identity or the new one, never none.
+// and at 2,000 random points leaves the old identity or the new one, never none (the
+// sweep is identity_powercut_rig.h; ./bench's identity_powercut_* figures come from it,
+// tests/bench/flash_powercut.cc).
 #include "mjc/boot/identity_store.h"
 
 #include <gtest/gtest.h>
 
-#include <cstdio>
-#include <random>
-
 #include "hal/sim/sim_flash.h"
+#include "identity_powercut_rig.h"
 
 namespace {
 
 using namespace mjc::boot;
+using namespace mjc::boot::test;
 using mjc::hal::SimFlash;
 
-constexpr std::uint32_t kA = 252, kB = 253;
-
-BoardIdentity Identity(int i) {
-  return {.node = static_cast<std::uint8_t>(1 + i % 8),
-          .hardware_revision = static_cast<std::uint8_t>(1 + i % 200)};
-}
-bool Same(const BoardIdentity& a, const BoardIdentity& b) {
-  return a.node == b.node && a.hardware_revision == b.hardware_revision;
-}
+constexpr std::uint32_t kA = kIdentityA, kB = kIdentityB;
 
 TEST(IdentityStore, SavesLoadsAndAlternatesPages) {
   SimFlash flash(256);
@@ -68,41 +61,10 @@ TEST(IdentityStore, ADamagedNewestRecordFallsBackToTheOlder) {
   EXPECT_TRUE(Same(loaded->identity, Identity(1)));
 }
 
-bool SurvivesCut(int history, long cut, std::uint64_t seed) {
-  SimFlash flash(256);
-  IdentityStore store(&flash, kA, kB);
-  for (int i = 0; i < history; ++i) {
-    if (store.Save(Identity(i)) != IdentityResult::kOk) return false;
-  }
-  flash.CutPowerAfter(cut, seed);
-  const IdentityResult result = store.Save(Identity(history));
-  flash.PowerOn();
-  const auto loaded = IdentityStore(&flash, kA, kB).Load();
-  const bool got_new = loaded && Same(loaded->identity, Identity(history));
-  if (result == IdentityResult::kOk) return got_new;
-  if (history == 0) return !loaded || got_new;
-  return loaded && (got_new || Same(loaded->identity, Identity(history - 1)));
-}
-
 TEST(IdentityStore, PowerCutAtEveryStepAndAtRandomPoints) {
-  int points = 0, lost = 0;
-  for (int history : {0, 1, 2}) {
-    for (long cut = 0; cut <= 5; ++cut) {  // an erase and 4 double-words
-      for (std::uint64_t seed = 1; seed <= 8; ++seed) {
-        ++points;
-        if (!SurvivesCut(history, cut, seed)) ++lost;
-      }
-    }
-  }
-  std::mt19937_64 rng(0x1D1D);
-  for (int trial = 0; trial < 2000; ++trial) {
-    ++points;
-    if (!SurvivesCut(static_cast<int>(rng() % 6), static_cast<long>(rng() % 6), rng())) {
-      ++lost;
-    }
-  }
-  EXPECT_EQ(lost, 0);
-  std::printf("identity_powercut_points: %d\nidentity_powercut_lost: %d\n", points, lost);
+  const IdentityPowerCutSweep sweep = IdentityPowerCuts();
+  EXPECT_EQ(sweep.points, 3 * 6 * 8 + 2000);
+  EXPECT_EQ(sweep.lost, 0);
 }
 
 }  // namespace

@@ -266,4 +266,31 @@ TEST(MjcImage, PacksShowsAndRefuses) {
   EXPECT_EQ(ReadBytes(out).size(), kHeaderArea + 600);
 }
 
+// The identity pages for a first flash through the debug connector: the layout of
+// identity_store.h's table, read here byte by byte, with zlib's CRC-32; page B erased;
+// a node outside 1..8 refused with nothing written.
+TEST(MjcImage, WritesIdentityPages) {
+  const std::string path = ::testing::TempDir() + "/mjc_image_identity.bin";
+  std::remove(path.c_str());
+  const std::string tool = MJC_IMAGE_TOOL;
+  ASSERT_EQ(Shell(tool + " identity " + path + " --node 5 --revision 2"), 0);
+  const std::vector<std::uint8_t> pages = ReadBytes(path);
+  ASSERT_EQ(pages.size(), 4096u);
+  EXPECT_EQ(GetLe(&pages[0], 4), 0x44494A4Du);  // 'MJID'
+  EXPECT_EQ(GetLe(&pages[4], 2), 1u);           // record version
+  EXPECT_EQ(GetLe(&pages[6], 2), 8u);           // payload length
+  EXPECT_EQ(pages[16], 5);                      // node id
+  EXPECT_EQ(pages[17], 2);                      // hardware revision
+  EXPECT_EQ(GetLe(&pages[24], 4), ZlibCrc(pages.data(), 24));
+  EXPECT_EQ(GetLe(&pages[28], 4), 0xC0DE1D1Du);  // commit mark
+  for (std::size_t i = 32; i < pages.size(); ++i) {
+    ASSERT_EQ(pages[i], 0xFF) << "byte " << i << " must be erased";
+  }
+  std::remove(path.c_str());
+  EXPECT_EQ(Shell(tool + " identity " + path + " --node 9 --revision 1 2>/dev/null"), 2);
+  EXPECT_EQ(Shell(tool + " identity " + path + " --node 1 --revision 0 2>/dev/null"), 2);
+  std::ifstream absent(path);
+  EXPECT_FALSE(absent.good()) << "a refused identity writes no file";
+}
+
 }  // namespace

@@ -105,10 +105,10 @@ void CheckAddSub(mjc::vt::Context& vt_context, std::uint64_t seed) {
   VT_EXPECT_EQ(worst, 0.0);
 }
 
-MJC_VECTOR_TEST(FixedAddSub, ExactOrSaturatedQ7_24) {
+MJC_VECTOR_TEST(FixedAddSub, ExactOrSaturatedQ7Dot24) {
   CheckAddSub<mjc::Angle>(vt_context, 11);
 }
-MJC_VECTOR_TEST(FixedAddSub, ExactOrSaturatedQ0_15Int16) {
+MJC_VECTOR_TEST(FixedAddSub, ExactOrSaturatedQ0Dot15Int16) {
   CheckAddSub<mjc::Duty>(vt_context, 12);
 }
 

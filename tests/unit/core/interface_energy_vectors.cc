@@ -192,7 +192,7 @@ MJC_VECTOR_TEST(PowerChain, ElasticInterfaceReadsNoLoss) {
 
 MJC_VECTOR_TEST(PowerChain, MisalignedTorqueWouldReadFalseLoss) {
   // The same elastic interface with τ delayed 5 ms more than θ̇: false loss of
-  // several points (design.md: ~5 points at 0.5 Hz), so alignment is what keeps
+  // several points (SIGNAL_CHAIN.md: ~5 points at 0.5 Hz), so alignment is what keeps
   // the elastic case at zero.
   const ChainResult r = RunChain(3.1, 0.0, 50);
   VT_EXPECT_TRUE(std::fabs(r.eta) > 3.0);

@@ -1,5 +1,5 @@
 // Backlash calibration: fits the firmware's play operator (mjc/core/backlash.h, the
-// paper's eq. 4) to a sweep recorded on the robot alone (design.md §5 "Calibration",
+// paper's eq. 4) to a sweep recorded on the robot alone (docs/DESIGN.md §5 "Calibration",
 // the paper's Fig. 7), then converts the fit into the firmware's fixed-point config.
 //
 // The model, in double precision, with the joint's first reading as initial state:
@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <span>
 #include <string>
@@ -94,6 +95,11 @@ struct BacklashFitOptions {
   // output follows that edge of the band and changes) in at least this fraction of the
   // samples, or its offset is not determined by the data. Legal (0, 0.5].
   double min_engaged_fraction = 0.02;
+  // Plausibility: the fit's residual RMS (θ_j − θ̃) must not exceed this, or the fit is
+  // refused. Legal > 0 rad. The default is ten counts of the 14-bit joint encoder
+  // (10 · 2π/16384 = 0.22°); a good fit on the simulated robot with sensor noise reads
+  // about one count (mjc-paper --scenario calibration: rms 0.023°).
+  double max_rms_error_rad = 10.0 * 2.0 * std::numbers::pi / 16384.0;
 };
 
 struct BacklashFit {

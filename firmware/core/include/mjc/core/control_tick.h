@@ -1,6 +1,6 @@
-// One control tick of the joint board (design.md §2): the unit the firmware's timer ISR
-// and the simulated board call at 10 kHz. Sample in, actuation out, plus telemetry and
-// events. No allocation, no blocking, no HAL: the caller reads the hardware into a
+// One control tick of the joint board (docs/DESIGN.md §2): the unit the firmware's timer
+// ISR and the simulated board call at 10 kHz. Sample in, actuation out, plus telemetry
+// and events. No allocation, no blocking, no HAL: the caller reads the hardware into a
 // Sample and writes the Actuation back.
 //
 // Order within a tick, so that a fault disables the bridge in the tick that sees it:
@@ -49,8 +49,8 @@ constexpr bool SeaStiffnessValid(Stiffness k) {
   return k > Stiffness{} && k <= Stiffness(100);
 }
 
-// What a calibration sets (design.md §5): the backlash model, the SEA stiffness and the
-// joint encoder's zero. The rest of ControlConfig is configuration, not calibration.
+// What a calibration sets (docs/DESIGN.md §5): the backlash model, the SEA stiffness and
+// the joint encoder's zero. The rest of ControlConfig is configuration, not calibration.
 struct Calibration {
   BacklashConfig backlash;
   Stiffness sea_stiffness = ControlConfig{}.sea_stiffness;

@@ -38,7 +38,7 @@ constexpr std::int64_t MaxTrackableMotorRpm(std::int32_t counts_per_rev,
   return std::int64_t{kMaxQuadratureStepCounts} * sample_hz * 60 / counts_per_rev;
 }
 
-// The design point (design.md §2: 10 kHz tick; a 512-line, 2048-edge encoder): the
+// The design point (docs/DESIGN.md §1-2: 10 kHz tick; a 512-line, 2048-edge encoder): the
 // extension tracks up to 9.6 million motor rpm (96,000 pulley rpm at 100:1), over 300
 // times what any brushed DC motor of this size reaches (≤ 30,000 rpm, i.e. ≤ 103 counts
 // a tick). In practice the timer's input filter, not the extension, limits the speed.

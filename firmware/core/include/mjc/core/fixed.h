@@ -1,6 +1,6 @@
 // Fixed-point quantities: a signed integer that carries its unit and its Q format.
 //
-// Fixed<U, F, Rep> holds value = raw · 2^-F in unit U. The rules (conventions.md):
+// Fixed<U, F, Rep> holds value = raw · 2^-F in unit U. The rules (docs/CONVENTIONS.md):
 //  - add / subtract only the same unit in the same format; the result saturates;
 //  - a product is exact: Fixed<U1,F1,R1> * Fixed<U2,F2,R2> is a Fixed<U1·U2, F1+F2> in
 //    the wide representation (int32 for 16-bit operands, int64 for 32-bit ones), and

@@ -1,5 +1,5 @@
 // Interface power and energy (paper eqs. 2, 3, 6) and the per-window summaries of
-// design.md §2.6.
+// docs/DESIGN.md §2, step 4.
 //
 // Energy is integrated exactly: every tick adds the raw Q24 power to an int64 (units of
 // 2^-24 W·tick), so the sum is exact whatever the decimation of telemetry, and it

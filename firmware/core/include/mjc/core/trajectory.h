@@ -1,8 +1,8 @@
-// Position setpoint generators (design.md §2.7): the sinusoidal trial, the
+// Position setpoint generators (docs/DESIGN.md §2, step 6): the sinusoidal trial, the
 // increasing-amplitude calibration sweep, hold, and rate-limited streamed setpoints.
 // TrajectoryGenerator::Step() runs once per control tick and returns the setpoint, its
 // derivative as velocity feed-forward, and the motion segment the energy windows
-// (design.md §2.6) are cut by.
+// (docs/DESIGN.md §2, step 4) are cut by.
 //
 // Sine and sweep timing is integer-exact. A cycle lasts N = 4·Q ticks, with Q the
 // ticks per quarter cycle,

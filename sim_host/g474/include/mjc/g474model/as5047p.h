@@ -1,7 +1,7 @@
 // An AS5047P-class 14-bit magnetic angle sensor on SPI, from ams' AS5047P datasheet
 // (v1-06, "SPI interface (slave)", "Register description", "Timing characteristics";
-// the register addresses and frame bits match the open drivers listed in g474-notes
-// §2.6).
+// the register addresses and frame bits match open drivers such as moteus fw/as5047.h
+// and its 16-bit, mode-1 SPI options).
 //
 // Covered: SPI mode 1 (CPOL 0, CPHA 1), 16-bit frames. Command frame: bit 15 PARC (even
 // parity over the 16 bits), bit 14 R/W (1 = read), bits 13:0 address. Read data frame:

@@ -1,10 +1,10 @@
 // FDCAN1 of the STM32G474 with its message RAM, and FDCAN_CONFIG.CKDIV, from RM0440
 // §44 "FD controller area network (FDCAN)" (§44.3 functional description, §44.4
 // registers); offsets, fields and reset values from ST's SVD v2.9; the G4's fixed
-// message-RAM layout from g474-notes §2.1–2.3 (ST's HAL SRAMCAN_* constants); the
+// message-RAM layout from ST's HAL (stm32g4xx_hal_fdcan.c, SRAMCAN_* constants); the
 // controller's behaviour where RM0440 follows Bosch's M_CAN user manual (bus-off
 // recovery, CCE/INIT handshake) rests on that manual's text as reproduced in the SVD
-// field descriptions and the notes.
+// field descriptions and as open G4 drivers (moteus) run it.
 //
 // Covered:
 //  - CCCR: INIT (set at reset, set by the controller at bus-off), CCE (settable only

@@ -1,6 +1,6 @@
 // RCC and PWR of the STM32G474, from RM0440 chapters "Reset and clock control (RCC)"
 // and "Power control (PWR)" (register layout and reset values checked against ST's
-// SVD v2.9, /work/shared/reference/STM32G474.svd).
+// SVD v2.9, hal/stm32g4/svd/STM32G474.svd).
 //
 // Covered: the oscillators the firmware uses (HSI16, HSE, main PLL, LSI) with their
 // ready flags appearing after start-up delays in virtual time; PLLCFGR with the "write

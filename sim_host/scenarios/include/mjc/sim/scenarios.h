@@ -1,5 +1,5 @@
-// The paper's experiments (design.md §5) on the simulated board: the calibration sweep
-// and fit, single trials with plant ground truth, the repeatability study (Table I,
+// The paper's experiments (docs/DESIGN.md §5) on the simulated board: the calibration
+// sweep and fit, single trials with plant ground truth, the repeatability study (Table I,
 // Fig. 9) and the amplitude sweep (Figs. 10–12, Tables II–III). "Board" numbers are
 // what the unmodified firmware estimated from its sensors; "truth" numbers are the
 // plant's interface power and energy over the same windows, which the firmware never

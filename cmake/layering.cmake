@@ -1,0 +1,28 @@
+# The layering of docs/DESIGN.md §3, checked at configure time: a link that breaks it
+# fails the configure step with the chain that reaches the forbidden target
+# (mjc_forbid_dependency, cmake/MjcBuild.cmake). Included at the end of the top-level
+# CMakeLists.txt, once every target exists.
+
+# The pure algorithms: no hardware, no wire format, no application, nothing of the host.
+mjc_forbid_dependency(mjc_core
+  "^mjc_(hal|protocol|app|host|plant|sim|scenarios|bootloader|boot_|image|g474)")
+
+# The wire format is shared by board and host: it knows neither the application that
+# serves it nor the hardware under it.
+mjc_forbid_dependency(mjc_protocol "^mjc_(hal|app|host|plant|sim|scenarios|g474)")
+
+# The application runs on the board: never the plant, the simulator or the host tools,
+# and only the HAL's interfaces, never a backend.
+mjc_forbid_dependency(mjc_app
+  "^mjc_(plant|sim_|scenarios|host|strict_json|hal_stm32g4|g474)")
+
+if(TARGET mjc_plant)
+  # The plant is physics: it must not replay the firmware's application or talk CAN.
+  mjc_forbid_dependency(mjc_plant "^mjc_(app|protocol|host|sim_board|scenarios|hal)")
+endif()
+
+if(TARGET mjc_g474_model)
+  # The register models are written from the reference manual, never from the drivers:
+  # they do not even see the drivers' register tables.
+  mjc_forbid_dependency(mjc_g474_model "^mjc_(hal|app|protocol|boot)")
+endif()

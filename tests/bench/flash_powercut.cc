@@ -1,0 +1,31 @@
+// Power cuts in the bootloader's flash writes, for ./bench: firmware updates cut at
+// every erase and program and at random points, on the simulated flash and on the
+// G474 FLASH register model behind its driver (tests/unit/bootloader/
+// flash_powercut_rig.h: the rule a bricked board breaks), and the identity record's
+// saves cut at every step and at random points (identity_powercut_rig.h). The goals
+// are asserted by powercut_test.cc and identity_store_test.cc beside the rigs.
+#include <cstdio>
+
+#include "flash_powercut_rig.h"
+#include "identity_powercut_rig.h"
+
+int main() {
+  using namespace mjc::boot::test;
+  const IdentityPowerCutSweep identity = IdentityPowerCuts();
+  std::printf(
+      "identity_powercut_points: %d cuts (every step of a save and 2,000 random)\n",
+      identity.points);
+  std::printf("identity_powercut_lost: %d boots (goal 0)\n", identity.lost);
+
+  const PowerCutSweep sim = SimulatedFlashPowerCuts();
+  const PowerCutSweep chip = G474FlashModelPowerCuts();
+  for (const auto* s : {&sim, &chip}) {
+    if (!s->first_failure.empty())
+      std::fprintf(stderr, "flash_powercut: %s\n", s->first_failure.c_str());
+  }
+  std::printf(
+      "flash_powercut_points: %d trials (simulated flash %d, G474 FLASH model %d)\n",
+      sim.points + chip.points, sim.points, chip.points);
+  std::printf("flash_bricked: %d boards (goal 0)\n", sim.bricked + chip.bricked);
+  return 0;
+}
