@@ -148,7 +148,7 @@ int main() {
   std::printf("virtual_board_window_energy_err_pct: %.2f %%\n",
               trial.worst_energy_error_pct());
   std::printf("virtual_board_eta_err_pt: %.2f points\n", trial.worst_eta_error_pt());
-  std::printf("virtual_board_vm_speed: %.2f (board s per wall s, real time asked)\n",
+  std::printf("virtual_board_vm_speed: %.2f x (board s per wall s, real time asked)\n",
               wall_s > 0 ? simulated_s / wall_s : 0.0);
   return 0;
 }

@@ -24,7 +24,6 @@
 #include <unistd.h>
 
 #include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -281,8 +280,6 @@ TEST(VirtualBoard, CalibratesAndRunsATrialAgainstPlantTruth) {
     const g474board::rig::CalibrationRun cal =
         g474board::rig::SweepAndFit(client, g474board::rig::PaperSweep(), robot);
     ASSERT_TRUE(cal.error.empty()) << cal.error;
-    std::printf("calibration: %zu samples, c_r %+.4f°, c_l %+.4f° off the plant's\n",
-                cal.samples, cal.error_right_deg, cal.error_left_deg);
     EXPECT_LT(cal.worst_error_deg(), 0.05);
     const auto answer = Upload(*upload_link, 1, cal.record);
     ASSERT_TRUE(answer.has_value()) << "the board did not answer the upload";
@@ -308,11 +305,6 @@ TEST(VirtualBoard, CalibratesAndRunsATrialAgainstPlantTruth) {
   ASSERT_TRUE(run.error.empty()) << run.error;
   EXPECT_TRUE(board::LastBoot().calibration_restored);
   for (const g474board::rig::WindowError& w : run.flexions) {
-    std::printf(
-        "flexion %u: loading %.5f J (truth %.5f), unloading %.5f J (truth %.5f), "
-        "η %.2f %% (truth %.2f)\n",
-        w.repetition, w.loading_J, w.truth_loading_J, w.unloading_J, w.truth_unloading_J,
-        w.eta_pct, w.truth_eta_pct);
     EXPECT_NEAR(w.loading_J, w.truth_loading_J, 0.02 * w.truth_loading_J);
     EXPECT_NEAR(w.unloading_J, w.truth_unloading_J, 0.02 * w.truth_loading_J);
     EXPECT_NEAR(w.eta_pct, w.truth_eta_pct, 1.0);
