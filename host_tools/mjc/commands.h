@@ -33,15 +33,18 @@ inline constexpr double kMaxFrequencyHz = 5.0;
 // The exit status of every subcommand. Stable: scripts test them.
 enum class Exit : int {
   kOk = 0,
-  kFailure = 1,    // on this side: bad or unwritable file, interface, link, unusable fit
-  kUsage = 2,      // bad command line
-  kNoAnswer = 3,   // a node did not answer, went silent or did not finish in time
-  kRefused = 4,    // the board refused, holds no calibration, or did not keep it
-  kFaulted = 5,    // the board faulted while carrying it out
-  kStopped = 6,    // the motion ended before its end: interrupted here (a signal; the
-                   // board was told to stop) or stopped by another tool
-  kAmbiguous = 7,  // two boards answer with one node id: nothing was done to it (a
-                   // motion already running was stopped)
+  kFailure = 1,     // on this side: bad or unwritable file, interface, link, unusable fit
+  kUsage = 2,       // bad command line
+  kNoAnswer = 3,    // a node did not answer, went silent or did not finish in time
+  kRefused = 4,     // the board refused, holds no calibration, or did not keep it
+  kFaulted = 5,     // the board faulted while carrying it out
+  kStopped = 6,     // the motion ended before its end: interrupted here (a signal; the
+                    // board was told to stop) or stopped by another tool
+  kAmbiguous = 7,   // two boards answer with one node id: nothing was done to it (a
+                    // motion already running was stopped)
+  kNotUpdated = 8,  // mjc flash: a board caught for an update does not run the new
+                    // image (named; usually left in its bootloader, which waits for an
+                    // image: run mjc flash again)
 };
 
 // The footer of every --help.
@@ -52,7 +55,8 @@ inline constexpr const char* kExitStatusHelp =
     "did not keep what was sent; 5 the board faulted; 6 the motion was stopped before "
     "its end (interrupted: the board was stopped and what arrived is saved; or stopped "
     "by another tool); 7 two boards answer with one node id (nothing was done to it; "
-    "give each board its own id).\n"
+    "give each board its own id); 8 mjc flash: a board was not updated (named; it waits "
+    "in its bootloader: run mjc flash again).\n"
     "Defaults: --iface from MJC_IFACE, else the config file's \"iface\", else vcan0; "
     "--node from its \"node\", else 1. The config file is $MJC_CONFIG, else "
     "~/.config/mjc/config.json (JSON: {\"iface\": \"can0\", \"node\": 2}; an unknown "
@@ -198,6 +202,7 @@ inline const char* OutcomeOf(Exit exit) {
       return "ambiguous";
     case Exit::kFailure:
     case Exit::kUsage:
+    case Exit::kNotUpdated:
       break;
   }
   return "failed";
@@ -257,6 +262,11 @@ inline void IdentifyOrThrow(host::BoardClient& board, std::chrono::milliseconds 
   throw Failure(Exit::kNoAnswer, why);
 }
 
+// mjc list's scan and table (or JSON lines) of every board on `iface`; mjc flash --info
+// shows the same. Throws Failure: nothing heard (kNoAnswer), two boards behind one id
+// (kAmbiguous, after the table), the link, a signal.
+void ListBoards(const std::string& iface, int silence_ms, bool json);
+
 void AddSim(CLI::App& app);
 void AddLog(CLI::App& app);
 void AddCal(CLI::App& app);
@@ -268,5 +278,6 @@ void AddMonitor(CLI::App& app);
 void AddClear(CLI::App& app);
 void AddStop(CLI::App& app);
 void AddList(CLI::App& app);
+void AddFlash(CLI::App& app);
 
 }  // namespace mjc::cli

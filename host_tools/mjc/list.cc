@@ -1,8 +1,9 @@
-// mjc list: every board on the bus, heard without asking anything: node id, image,
-// build (and whether it is this mjc's), state, calibration, latched fault, reset cause,
-// and two boards answering with one node id. It listens until each node heard has
-// shown every board behind its id (host::BusScan: a BoardInfo period and a tenth of
-// the boards' own time), or the bus has been silent for --silence-ms.
+// mjc list: every board on the bus, heard without asking anything: node id, image
+// (application or bootloader), build (and whether it is this mjc's), state (a
+// bootloader's: ready, receiving, committed, and why it stays), calibration, latched
+// fault, reset cause, and two boards answering with one node id. It listens until each
+// node heard has shown every board behind its id (host::BusScan: a BoardInfo period and a
+// tenth of the boards' own time), or the bus has been silent for --silence-ms.
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -49,7 +50,16 @@ nlohmann::json NodeJson(int node, const host::ScannedNode& n) {
       j[key] = nullptr;
     }
   }
-  if (const auto& h = n.heartbeat) {
+  if (n.in_bootloader() && n.boot_status) {
+    const protocol::BootStatus& b = *n.boot_status;
+    j["state"] = host::DescribeBootStatus(b);
+    j["calibrated"] = nullptr;
+    j["fault"] = nullptr;
+    j["boot"] = {{"state", host::BootStateName(b.state)},
+                 {"reason", host::StayReasonName(b.reason)},
+                 {"error", host::BootErrorName(b.error)},
+                 {"progress_permille", b.progress_permille}};
+  } else if (const auto& h = n.heartbeat) {
     j["state"] = host::StateName(h->state);
     j["calibrated"] = h->calibrated;
     j["fault"] = h->fault == Fault::kNone
@@ -78,59 +88,80 @@ void AddList(CLI::App& app) {
       ->check(InRange(100, 60000, "ms"))
       ->capture_default_str();
   cmd->add_flag("--json", json, "One JSON object per node and line");
-  cmd->callback([] {
-    auto link = OpenLink(iface);
-    const std::atomic<bool>& stop = StopOnSignals();
-    host::BusScan scan;
-    std::string why;
-    const host::ScanEnd end =
-        host::ScanBus(*link, &scan, std::chrono::milliseconds(silence_ms), &stop, &why);
-    if (end == host::ScanEnd::kLinkFailed) throw Failure(why);
-    if (end == host::ScanEnd::kInterrupted) throw Failure(Exit::kStopped, "interrupted");
-    if (scan.nodes().empty()) {
-      throw Failure(Exit::kNoAnswer,
-                    "no board on " + iface + " (nothing heard for " +
-                        std::to_string(silence_ms) +
-                        " ms: are the boards powered, and the interface up at the "
-                        "bus's bitrate?)");
+  cmd->callback([] { ListBoards(iface, silence_ms, json); });
+}
+
+void ListBoards(const std::string& iface, int silence_ms, bool json) {
+  auto link = OpenLink(iface);
+  const std::atomic<bool>& stop = StopOnSignals();
+  host::BusScan scan;
+  std::string why;
+  const host::ScanEnd end =
+      host::ScanBus(*link, &scan, std::chrono::milliseconds(silence_ms), &stop, &why);
+  if (end == host::ScanEnd::kLinkFailed) throw Failure(why);
+  if (end == host::ScanEnd::kInterrupted) throw Failure(Exit::kStopped, "interrupted");
+  if (scan.nodes().empty()) {
+    throw Failure(Exit::kNoAnswer,
+                  "no board on " + iface + " (nothing heard for " +
+                      std::to_string(silence_ms) +
+                      " ms: are the boards powered, and the interface up at the "
+                      "bus's bitrate?)");
+  }
+  std::string ambiguous;
+  if (!json) {
+    std::printf("%-4s  %-11s  %-14s  %-18s  %-11s  %-10s  %-9s  %-8s  %s\n", "node",
+                "image", "build", "", "state", "calibrated", "reset", "instance",
+                "fault");
+  }
+  for (const auto& [node, n] : scan.nodes()) {
+    if (n.identity.ambiguous()) {
+      ambiguous += (ambiguous.empty() ? "" : "; ") + n.identity.Message(node);
     }
-    std::string ambiguous;
-    if (!json) {
-      std::printf("%-4s  %-11s  %-14s  %-18s  %-11s  %-10s  %-9s  %-8s  %s\n", "node",
-                  "image", "build", "", "state", "calibrated", "reset", "instance",
-                  "fault");
+    if (json) {
+      std::printf("%s\n", NodeJson(node, n).dump().c_str());
+      continue;
     }
-    for (const auto& [node, n] : scan.nodes()) {
-      if (n.identity.ambiguous()) {
-        ambiguous += (ambiguous.empty() ? "" : "; ") + n.identity.Message(node);
+    if (n.identity.ambiguous()) {
+      std::printf("%4d  TWO BOARDS: %s\n", node, n.identity.Message(node).c_str());
+      continue;
+    }
+    const auto& info = n.identity.info();
+    if (n.in_bootloader()) {
+      // Its state, and why it stays where the application's fault would be.
+      const auto& b = n.boot_status;
+      std::string state = b ? std::string(host::BootStateName(b->state)) : "?";
+      std::string stays = "-";
+      if (b && b->state == protocol::BootState::kReceiving) {
+        state += " " + std::to_string(b->progress_permille / 10) + "%";
+      } else if (b && b->state == protocol::BootState::kReady) {
+        stays = "stays: " + std::string(host::StayReasonName(b->reason));
+        if (b->error != protocol::BootError::kNone) {
+          stays += " (" + std::string(host::BootErrorName(b->error)) + ")";
+        }
       }
-      if (json) {
-        std::printf("%s\n", NodeJson(node, n).dump().c_str());
-        continue;
-      }
-      if (n.identity.ambiguous()) {
-        std::printf("%4d  TWO BOARDS: %s\n", node, n.identity.Message(node).c_str());
-        continue;
-      }
-      const auto& info = n.identity.info();
-      const auto& h = n.heartbeat;
-      std::printf(
-          "%4d  %-11s  %-14s  %-18s  %-11s  %-10s  %-9s  %-8s  %s\n", node,
-          info ? std::string(host::ImageName(info->image)).c_str() : "?",
-          info ? host::BuildName(info->build, info->dirty).c_str() : "no BoardInfo",
-          info ? BuildMatch(*info).c_str() : "(older image?)",
-          h ? std::string(host::StateName(h->state)).c_str() : "?",
-          h ? (h->calibrated ? "yes" : "no") : "?",
-          info ? std::string(host::ResetCauseName(info->reset_cause)).c_str() : "?",
-          info ? Hex4(info->instance).c_str() : "?",
-          h && h->fault != Fault::kNone ? host::DescribeFault(h->fault).c_str() : "-");
+      std::printf("%4d  %-11s  %-14s  %-18s  %-11s  %-10s  %-9s  %-8s  %s\n", node,
+                  "bootloader", host::BuildName(info->build, info->dirty).c_str(),
+                  BuildMatch(*info).c_str(), state.c_str(), "-",
+                  std::string(host::ResetCauseName(info->reset_cause)).c_str(),
+                  Hex4(info->instance).c_str(), stays.c_str());
+      continue;
     }
-    if (!json) {
-      std::printf("this mjc: %s\n",
-                  host::BuildName(build::kCommit, build::kDirty).c_str());
-    }
-    if (!ambiguous.empty()) throw Failure(Exit::kAmbiguous, ambiguous);
-  });
+    const auto& h = n.heartbeat;
+    std::printf(
+        "%4d  %-11s  %-14s  %-18s  %-11s  %-10s  %-9s  %-8s  %s\n", node,
+        info ? std::string(host::ImageName(info->image)).c_str() : "?",
+        info ? host::BuildName(info->build, info->dirty).c_str() : "no BoardInfo",
+        info ? BuildMatch(*info).c_str() : "(older image?)",
+        h ? std::string(host::StateName(h->state)).c_str() : "?",
+        h ? (h->calibrated ? "yes" : "no") : "?",
+        info ? std::string(host::ResetCauseName(info->reset_cause)).c_str() : "?",
+        info ? Hex4(info->instance).c_str() : "?",
+        h && h->fault != Fault::kNone ? host::DescribeFault(h->fault).c_str() : "-");
+  }
+  if (!json) {
+    std::printf("this mjc: %s\n", host::BuildName(build::kCommit, build::kDirty).c_str());
+  }
+  if (!ambiguous.empty()) throw Failure(Exit::kAmbiguous, ambiguous);
 }
 
 }  // namespace mjc::cli

@@ -118,6 +118,7 @@ int main(int argc, char** argv) {
   mjc::cli::AddClear(app);
   mjc::cli::AddStop(app);
   mjc::cli::AddList(app);
+  mjc::cli::AddFlash(app);
   if (const std::string unknown = UnknownCommand(app, argc, argv); !unknown.empty()) {
     std::fprintf(stderr, "%s\n", unknown.c_str());
     return static_cast<int>(Exit::kUsage);

@@ -1,5 +1,6 @@
 #include "mjc/host/bus_scan.h"
 
+#include "mjc/boot/bootloader.h"
 #include "mjc/protocol/codec.h"
 
 namespace mjc::host {
@@ -22,13 +23,24 @@ void BusScan::Handle(const CanFrame& f) {
     if (Decode(f, &h) != DecodeError::kOk) return;
     n.identity.OnHeartbeat(h.tick);
     n.heartbeat = h;
+    n.bootloader_clock = false;
+  } else if (function == static_cast<std::uint8_t>(Function::kBootStatus)) {
+    // The bootloader's clock, in ms, told apart and compared like a heartbeat's ticks.
+    BootStatus s;
+    if (Decode(f, &s) != DecodeError::kOk) return;
+    n.identity.OnHeartbeat(s.tick_ms * (kBoardTickHz / 1000u));
+    n.boot_status = s;
+    n.bootloader_clock = true;
   } else {
     return;
   }
   constexpr auto kTicks = static_cast<std::uint32_t>(kBoardInfoPeriod.count() * 11 / 10 *
                                                      kBoardTickHz / 1000);
+  constexpr auto kBootTicks =
+      boot::Bootloader::kInfoPeriodMs * 11 / 10 * (kBoardTickHz / 1000u);
   n.shown = n.shown || n.identity.ambiguous() || n.infos >= 3 ||
-            n.identity.heartbeats() >= 30 || n.identity.elapsed_ticks() >= kTicks;
+            n.identity.heartbeats() >= 30 ||
+            n.identity.elapsed_ticks() >= (n.bootloader_clock ? kBootTicks : kTicks);
 }
 
 bool BusScan::Complete() const {

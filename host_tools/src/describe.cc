@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "mjc/boot/image_header.h"
+
 namespace mjc::host {
 
 std::string_view FaultName(Fault fault) {
@@ -104,6 +106,101 @@ std::string BuildName(std::uint32_t commit, bool dirty) {
   char hex[16];
   std::snprintf(hex, sizeof hex, "%08x", commit);
   return std::string(hex) + (dirty ? "+dirty" : "");
+}
+
+std::string_view BootStateName(protocol::BootState state) {
+  switch (state) {
+    case protocol::BootState::kHoldWindow:
+      return "hold window";
+    case protocol::BootState::kReady:
+      return "ready";
+    case protocol::BootState::kReceiving:
+      return "receiving";
+    case protocol::BootState::kCommitted:
+      return "committed";
+  }
+  return "?";
+}
+
+std::string_view StayReasonName(protocol::StayReason reason) {
+  switch (reason) {
+    case protocol::StayReason::kNone:
+      return "not staying";
+    case protocol::StayReason::kNoValidImage:
+      return "no valid image";
+    case protocol::StayReason::kRequested:
+      return "asked by the application";
+    case protocol::StayReason::kHoldFrame:
+      return "held by a host";
+    case protocol::StayReason::kBootLoop:
+      return "boot loop: 3 starts unconfirmed";
+    case protocol::StayReason::kUpdate:
+      return "update begun";
+  }
+  return "?";
+}
+
+std::string_view BootErrorName(protocol::BootError error) {
+  using E = protocol::BootError;
+  // The image checks have the same numbers and names (mjc::boot::ImageCheck).
+  const auto code = static_cast<std::uint8_t>(error);
+  if (code >= 1 && code <= 8)
+    return boot::ImageCheckName(static_cast<boot::ImageCheck>(code));
+  switch (error) {
+    case E::kNone:
+      return "none";
+    case E::kNoImage:
+    case E::kBadHeader:
+    case E::kWrongBoard:
+    case E::kWrongHardware:
+    case E::kBadLength:
+    case E::kBadLoadAddress:
+    case E::kBadVectors:
+    case E::kImageCrc:
+      break;
+    case E::kNotReceiving:
+      return "not_receiving";
+    case E::kUnexpectedOffset:
+      return "unexpected_offset";
+    case E::kBadChunk:
+      return "bad_chunk";
+    case E::kOutOfRegion:
+      return "out_of_region";
+    case E::kFlashError:
+      return "flash_error";
+    case E::kIncomplete:
+      return "incomplete";
+    case E::kTransfer:
+      return "transfer";
+    case E::kBadRequest:
+      return "bad_request";
+    case E::kNothingToBoot:
+      return "nothing_to_boot";
+    case E::kMotionRunning:
+      return "motion_running";
+  }
+  return "unknown";
+}
+
+std::string DescribeBootStatus(const protocol::BootStatus& status) {
+  using protocol::BootState;
+  using protocol::StayReason;
+  switch (status.state) {
+    case BootState::kHoldWindow:
+    case BootState::kCommitted:
+      return std::string(BootStateName(status.state));
+    case BootState::kReceiving:
+      return "receiving " + std::to_string(status.progress_permille / 10) + "%";
+    case BootState::kReady:
+      break;
+  }
+  std::string why(StayReasonName(status.reason));
+  if (status.error != protocol::BootError::kNone &&
+      (status.reason == StayReason::kNoValidImage ||
+       status.reason == StayReason::kUpdate)) {
+    why += ": " + std::string(BootErrorName(status.error));
+  }
+  return "ready (" + why + ")";
 }
 
 std::string SilentNode(int node, std::string_view iface) {

@@ -20,8 +20,10 @@ if ! wait_receivers $((base + 1)); then
   exit 1
 fi
 pids=()
+# 6 s of each application at full rate: --seconds is board time from power-on, and the
+# first 0.2 s of it are the bootloader's hold window.
 for node in 1 2 3 4 5 6 7 8; do
-  "$mjc" sim --iface vcan0 --node "$node" --speed 2 --seconds 6 2>"$work/sim$node.err" &
+  "$mjc" sim --iface vcan0 --node "$node" --speed 2 --seconds 6.2 2>"$work/sim$node.err" &
   pids+=($!)
 done
 wait "${pids[@]}"

@@ -30,6 +30,17 @@ wait_for() {
   return 1
 }
 
+# STATUS ERRFILE COMMAND...: runs the command; true when it exits with STATUS and says
+# why in one line on stderr (ERRFILE): the tools' refusal contract.
+refuses() {
+  local want=$1 err=$2 got
+  shift 2
+  "$@" >/dev/null 2>"$err"
+  got=$?
+  echo "exit $got (want $want): $(cat "$err")"
+  [ "$got" -eq "$want" ] && [ "$(wc -l <"$err")" -eq 1 ]
+}
+
 # FILE...: the summary line, with the check log and the given files' tails when a
 # check failed; the status is the script's exit status.
 finish() {

@@ -13,16 +13,6 @@ work=$(mktemp -d)
 . "$(dirname "$0")/checks.sh"
 cd "$work" || exit 1  # the default output folders (out/…) land here
 
-# One line on stderr and exit status STATUS: the refusal contract.
-refuses() {  # STATUS ERRFILE COMMAND...
-  local want=$1 err=$2 got
-  shift 2
-  "$@" >/dev/null 2>"$err"
-  got=$?
-  echo "exit $got (want $want): $(cat "$err")"
-  [ "$got" -eq "$want" ] && [ "$(wc -l <"$err")" -eq 1 ]
-}
-
 # The command line, before any board: one line each, exit 2.
 check "a mistyped command: one line, exit 2" refuses 2 typo.err "$mjc" calbrate
 check "  with a did-you-mean" \

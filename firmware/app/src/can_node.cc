@@ -113,6 +113,15 @@ void CanNode::HandleFrame(const CanFrame& frame) {
     case Function::kIsoTpToBoard:
       HandleIsoTp(frame);
       return;
+    case Function::kBootHold: {
+      if (!config_.bootloader) {
+        ++counters_.ignored;
+        return;
+      }
+      protocol::BootHold h;
+      if (count(Decode(frame, &h))) HandleBootHold(h);
+      return;
+    }
     case Function::kHostHeartbeat: {
       protocol::HostHeartbeat h;
       // Only the heartbeat of the session that started the motion keeps it going.
@@ -134,8 +143,10 @@ void CanNode::HandleCommand(const protocol::Command& c) {
   const std::uint32_t hz = tick_hz();
   const bool start = IsStart(c.code);
   // One start at a time in the mailbox, so that the session its verdict binds the
-  // motion to is known without doubt.
-  if (start && start_pending_) return Answer(tag, {CommandOutcomeCode::kRefusedBusy, 0});
+  // motion to is known without doubt; none once the board is leaving for its bootloader.
+  if (start && (start_pending_ || leaving_)) {
+    return Answer(tag, {CommandOutcomeCode::kRefusedBusy, 0});
+  }
   CommandOutcome o;
   switch (c.code) {
     case CommandCode::kStop:
@@ -226,6 +237,29 @@ void CanNode::OnVerdict(const AppEvent& e) {
       break;
   }
   Answer(e.tag, e.outcome);
+}
+
+void CanNode::HandleBootHold(const protocol::BootHold& hold) {
+  protocol::BootResult r;
+  r.request = protocol::BootRequest::kHold;
+  if (hold.key != protocol::kBootHoldKey) {
+    r.error = protocol::BootError::kBadRequest;
+    return Send(r);
+  }
+  // Only at rest: no motion running or about to start (a reset stops the bridge, but a
+  // motion is the host's to stop, and a host that asks mid-trial has made a mistake it
+  // should hear about). A fault leaves the bridge off: a faulted board may be updated.
+  const JointApp::Snapshot last = app_->Latest();
+  const bool moving = last.state == BoardState::kRunning ||
+                      last.state == BoardState::kCalibrating || last.bridge_enabled ||
+                      start_pending_;
+  if (moving) {
+    ++counters_.boot_holds_refused;
+    r.error = protocol::BootError::kMotionRunning;
+    return Send(r);
+  }
+  leaving_ = true;
+  Send(r);  // {hold, none}: the bootloader's BootStatus follows within milliseconds
 }
 
 void CanNode::OnBusOff() {

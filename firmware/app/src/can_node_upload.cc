@@ -55,7 +55,9 @@ void CanNode::HandleIsoTp(const protocol::CanFrame& frame) {
   std::uint8_t detail = 0;
   const CalibrationResult decoded = DecodeCalibration(isotp_.payload(), &record, &detail);
   if (decoded != CalibrationResult::kAccepted) return ReplyCalibration(decoded, detail);
-  if (config_change_pending_) return ReplyCalibration(CalibrationResult::kRefusedBusy, 0);
+  if (config_change_pending_ || leaving_) {
+    return ReplyCalibration(CalibrationResult::kRefusedBusy, 0);
+  }
   const CommandOutcome o = app_->SetCalibration(
       {record.backlash, record.sea_stiffness, record.joint_zero_count},
       Tag(Origin::kCalibration, 0));

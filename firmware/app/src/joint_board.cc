@@ -1,16 +1,26 @@
 #include "mjc/app/joint_board.h"
 
 namespace mjc::app {
+namespace {
+
+CanNodeConfig WithBootloader(CanNodeConfig config, bool bootloader) {
+  config.bootloader = bootloader;
+  return config;
+}
+
+}  // namespace
 
 JointBoard::JointBoard(const JointBoardConfig& config, hal::CanPort* port,
-                       hal::Flash* flash)
+                       hal::Flash* flash, hal::BootEntry* boot)
     : app_(config.control),
       store_(flash == nullptr ? std::nullopt
                               : std::optional<CalibrationStore>(
                                     std::in_place, flash, config.calibration_page_a,
                                     config.calibration_page_b)),
-      node_(&app_, config.can, store_ ? &*store_ : nullptr),
-      port_(port) {}
+      node_(&app_, WithBootloader(config.can, boot != nullptr),
+            store_ ? &*store_ : nullptr),
+      port_(port),
+      boot_(boot) {}
 
 std::optional<CalibrationStore::Loaded> JointBoard::Boot() {
   if (!store_) return std::nullopt;
@@ -33,16 +43,18 @@ void JointBoard::Poll() {
     }
     return;
   }
-  if (holding_) {
-    if (!port_->Send(held_)) return;
+  if (!holding_ || port_->Send(held_)) {
     holding_ = false;
-  }
-  while (node_.PopTx(&held_)) {
-    if (!port_->Send(held_)) {
-      holding_ = true;
-      return;
+    while (node_.PopTx(&held_)) {
+      if (!port_->Send(held_)) {
+        holding_ = true;
+        break;
+      }
     }
   }
+  // The hold's answer is with the port (or waits behind a full one: it is a courtesy, the
+  // host watches for the bootloader's own frames).
+  if (boot_ != nullptr && node_.EnterBootloaderNow()) boot_->EnterBootloader();
 }
 
 }  // namespace mjc::app

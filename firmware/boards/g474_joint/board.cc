@@ -2,7 +2,14 @@
 // firmware's composition root (app::JointBoard: the application, its CAN node and its
 // calibration store) on them, and serves the 10 kHz tick and the main loop. The board is
 // handed the drivers through their interfaces only: hal::JointIo (g_joint_io, the
-// tick), hal::CanPort (g_can) and hal::Flash (the calibration pages).
+// tick), hal::CanPort (g_can), hal::Flash (the calibration pages; reads anywhere) and
+// hal::BootEntry (the way into the bootloader on a host's BootHold).
+//
+// Who the board is comes from flash, not from this build: its node id from the identity
+// record commissioning wrote (RunOptions::node without one), so that every update keeps
+// it; the build it reports from the image header the bootloader checked before it handed
+// over (the same commit the build compiled in, by construction of the packed file; the
+// build's own without a header, as on the virtual board, which no bootloader precedes).
 //
 // Built into the image and, unchanged, into the virtual board (board.h: the two
 // entries).
@@ -21,6 +28,10 @@
 #include "interrupts.h"
 #include "mjc/app/joint_board.h"
 #include "mjc/app/joint_config.h"
+#include "mjc/boot/handoff.h"
+#include "mjc/boot/identity_store.h"
+#include "mjc/boot/image_check.h"
+#include "mjc/boot/layout.h"
 #include "mjc/build_id.h"
 
 namespace mjc::board {
@@ -46,6 +57,31 @@ alignas(app::JointBoard) __attribute__((section(".ccm_bss.board"))) std::uint8_t
     g_board_storage[sizeof(app::JointBoard)];
 app::JointBoard* g_board = nullptr;
 BootFacts g_boot;
+
+// A host's BootHold accepted at rest (app::CanNode): into the bootloader, which stays
+// (StayReason kRequested) and takes the new image.
+class Stm32g4BootEntry final : public hal::BootEntry {
+  // The hold's answer and what was queued before it leave first: the controller's three
+  // TX elements take under 0.5 ms at 1 Mbit/s. Bounded, since the answer is a courtesy
+  // (the host watches for the bootloader's own frames) and a bus that does not take it
+  // must not keep the board: 1 ms of the cycle counter, well inside the watchdog's
+  // 100 ms.
+  static constexpr std::uint32_t kDrainCycles = stm32g4::kSysclkHz / 1000u;
+
+  void DoEnterBootloader() override {
+    StopBridge();
+    stm32g4::DisableInterrupts();
+    const std::uint32_t since = stm32g4::CycleCount();
+    while (!g_can.TransmitIdle() && stm32g4::CycleCount() - since < kDrainCycles) {
+    }
+    boot::RequestBootloader(Handoff());
+    stm32g4::RequestSystemReset();
+    // The reset comes within a few cycles on the chip; the virtual chip takes the one
+    // it recorded at its next event, which WFI reaches.
+    for (;;) stm32g4::WaitForInterrupt();
+  }
+};
+Stm32g4BootEntry g_boot_entry;
 
 protocol::ResetCause WireResetCause(stm32g4::ResetCause cause) {
   switch (cause) {
@@ -107,22 +143,30 @@ void Run(const RunOptions& options) {
 
   auto* flash = new (g_flash_storage) stm32g4::Stm32g4Flash(CalibrationPage(), 2);
   const bool flash_ok = flash->Init();
+  const auto identity =
+      flash_ok ? boot::IdentityStore(flash, boot::kG474Layout.identity_page_a,
+                                     boot::kG474Layout.identity_page_b)
+                     .Load()
+               : std::nullopt;
+  const std::uint8_t node = identity ? identity->identity.node : options.node;
+  boot::AppRegion region(flash, boot::kG474Layout);
+  const auto header = flash_ok ? boot::ReadInstalledHeader(region) : std::nullopt;
   const bool joint_ok = g_joint_io.Init();
-  const stm32g4::FdcanResult can_result = g_can.Init(NodeFilters(options.node));
+  const stm32g4::FdcanResult can_result = g_can.Init(NodeFilters(node));
 
   // The board. Its first report (BoardInfo) says which build runs and why it started;
   // the rest of the boot facts keep it from running the motor: a clock that did not
   // reach 170 MHz, a joint encoder or CAN controller that did not come up.
   app::JointBoardConfig config{
       app::DefaultJointConfig(), {}, CalibrationPage(), CalibrationPage() + 1};
-  config.can.node = options.node;
+  config.can.node = node;
   if (options.host_timeout_ms) config.can.host_timeout_ms = *options.host_timeout_ms;
-  config.can.identity.build = build::kCommit;
-  config.can.identity.dirty = build::kDirty;
+  config.can.identity.build = header ? header->commit : build::kCommit;
+  config.can.identity.dirty = header ? header->dirty : build::kDirty;
   config.can.identity.reset_cause = WireResetCause(reset_cause);
   config.can.identity.instance = stm32g4::UniqueId16();
-  g_board =
-      new (g_board_storage) app::JointBoard(config, &g_can, flash_ok ? flash : nullptr);
+  g_board = new (g_board_storage)
+      app::JointBoard(config, &g_can, flash_ok ? flash : nullptr, &g_boot_entry);
   if (const auto restored = g_board->Boot()) {
     g_boot.calibration_restored = true;
     g_boot.calibration_sequence = restored->sequence;

@@ -39,20 +39,20 @@ inline constexpr stm32g4::JointIoBlocks kJointIoBlocks{
 using JointIo = stm32g4::Stm32g4JointIo<kJointIoBlocks>;
 static_assert(hal::JointIo<JointIo>);
 
-// The board's CAN node id. Fixed for now; a later board revision reads it from
-// straps or the option bytes' user data.
+// The board's CAN node id when its identity pages hold no record (commissioning writes
+// one, mjc/boot/identity_store.h; every image and every update keeps it).
 inline constexpr std::uint8_t kNodeId = 1;
 
 // Acceptance filters: exactly the host → board messages addressed to `node` (one
 // identifier each, mask 0x7FF); every other identifier is rejected by the controller.
-constexpr std::array<stm32g4::CanFilter, 8> NodeFilters(std::uint8_t node) {
+constexpr std::array<stm32g4::CanFilter, 9> NodeFilters(std::uint8_t node) {
   using protocol::Function;
   constexpr Function kTaken[] = {
       Function::kCommand,       Function::kSetpoint,     Function::kTrialConfig,
       Function::kSweepConfig,   Function::kParamWrite,   Function::kParamRead,
-      Function::kHostHeartbeat, Function::kIsoTpToBoard,
+      Function::kHostHeartbeat, Function::kIsoTpToBoard, Function::kBootHold,
   };
-  std::array<stm32g4::CanFilter, 8> filters{};
+  std::array<stm32g4::CanFilter, 9> filters{};
   for (std::size_t i = 0; i < filters.size(); ++i) {
     filters[i] = {static_cast<std::uint16_t>(
                       protocol::MakeId(static_cast<std::uint8_t>(kTaken[i]), node)),
@@ -85,9 +85,10 @@ extern CrashRecord g_crash;
 // then brings the clock tree up to 170 MHz (its result is in the report too).
 void BringUp();
 
-// What a later board revision reads from straps; fixed on this one (the image runs the
-// defaults). The virtual board passes its command line's.
+// What the image runs with its defaults; the virtual board passes its command line's.
 struct RunOptions {
+  // The node id when the identity pages hold no record (an identity record's wins, as
+  // on the chip).
   std::uint8_t node = kNodeId;
   // The host supervision timeout (CanNodeConfig::host_timeout_ms); none: the node's
   // default. A board simulated faster than real time scales it with its speed.

@@ -40,6 +40,16 @@ bool RegionCrc(const AppRegion& region, std::uint32_t offset, std::uint32_t leng
   return true;
 }
 
+std::optional<ImageHeader> ReadInstalledHeader(const AppRegion& region) {
+  HeaderBytes bytes{};
+  ImageHeader header;
+  if (region.Read(0, bytes) != protocol::BootError::kNone ||
+      DecodeHeader(bytes, &header) != ImageCheck::kValid) {
+    return std::nullopt;
+  }
+  return header;
+}
+
 InstalledImage CheckInstalledImage(const AppRegion& region, const ImageTarget& target,
                                    ServiceHook service) {
   InstalledImage out;

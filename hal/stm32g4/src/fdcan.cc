@@ -157,6 +157,10 @@ bool Stm32g4Fdcan::DoSend(const protocol::CanFrame& frame) {
   return true;
 }
 
+bool Stm32g4Fdcan::TransmitIdle() const {
+  return txfqs::kTffl.Get(Read32(kBase + kTxfqs)) == ram::kFifoElements;
+}
+
 bool Stm32g4Fdcan::DoReceive(protocol::CanFrame* frame) {
   if (!rx_.Pop(frame)) return false;
   received_.store(received_.load(std::memory_order_relaxed) + 1,

@@ -12,7 +12,28 @@ bool LinkCanPort::DoSend(const protocol::CanFrame& frame) {
   return true;
 }
 
+bool LinkCanPort::WaitForFrame(int timeout_ms) {
+  if (waiting_) return true;
+  if (failed_) return false;
+  std::string why;
+  const host::ReceiveResult r = link_->Receive(timeout_ms, &why);
+  if (r.status == host::ReceiveStatus::kError) {
+    failed_ = true;
+    error_ = why;
+    return false;
+  }
+  if (!r) return false;
+  waiting_ = r->frame;
+  return true;
+}
+
 bool LinkCanPort::DoReceive(protocol::CanFrame* frame) {
+  if (waiting_) {
+    *frame = *waiting_;
+    waiting_.reset();
+    ++received_;
+    return true;
+  }
   if (failed_) return false;
   std::string why;
   const host::ReceiveResult r = link_->Receive(0, &why);

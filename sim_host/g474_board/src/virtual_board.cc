@@ -87,8 +87,8 @@ Picoseconds BusTime(const g474model::CanBusFrame& f, double nominal, double data
 VirtualBoard::VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link)
     : config_(config), link_(link) {
   // The FLASH model takes a file of exactly its array's size and writes the whole array
-  // back at every erase and program: any other file (mjc sim's flash file is two
-  // pages) is refused here, before the model could overwrite it.
+  // back at every erase and program: any other file is refused here, before the model
+  // could overwrite it.
   if (!config_.flash_path.empty() && std::filesystem::exists(config_.flash_path)) {
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(config_.flash_path, error);
@@ -303,7 +303,9 @@ void VirtualBoard::Report() {
     }
     if (!announced_) {
       announced_ = true;
-      Say("node %d on %s (%s)", config_.node, config_.iface.c_str(),
+      // The node id the firmware runs with: an identity record in the flash file wins
+      // over the command line's.
+      Say("node %d on %s (%s)", fw->node().config().node, config_.iface.c_str(),
           config_.description.c_str());
     }
   }

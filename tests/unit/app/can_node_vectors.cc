@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "mjc/app/can_node.h"
+#include "mjc/app/joint_board.h"
 #include "vector_test.h"
 
 namespace {
@@ -31,7 +32,8 @@ mjc::Calibration TestCalibration() {
 }
 
 struct Board {
-  Board() : app(ControlConfig{}), node(&app, CanNodeConfig{}) {}
+  explicit Board(const CanNodeConfig& config = {})
+      : app(ControlConfig{}), node(&app, config) {}
   // Ticks the app and polls the node; counts what it sent by function code.
   void Run(int ticks) {
     for (int i = 0; i < ticks; ++i) {
@@ -452,6 +454,120 @@ MJC_VECTOR_TEST(CanNode, TellsWhoItIsAtStartAndTenTimesASecond) {
     answered = answered || Decode(f, &v) == DecodeError::kOk;
   }
   VT_EXPECT_TRUE(answered && v.status == ParamStatus::kReadOnly);
+}
+
+CanNodeConfig WithBootloader() {
+  CanNodeConfig c;
+  c.bootloader = true;
+  return c;
+}
+
+MJC_VECTOR_TEST(CanNode, EntersTheBootloaderOnAHoldOnlyAtRest) {
+  static Board b(WithBootloader());
+  Calibrate(b);
+  StartLongTrial(b, 1);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
+  // While a trial runs: refused, and the board stays where it is.
+  b.node.HandleFrame(Encode(BootHold{}, 1));
+  b.Drain();
+  BootResult r = Last<BootResult>(vt_context, b);
+  VT_EXPECT_TRUE(r.request == BootRequest::kHold && r.error == BootError::kMotionRunning);
+  VT_EXPECT_TRUE(!b.node.EnterBootloaderNow());
+  VT_EXPECT_EQ(b.node.counters().boot_holds_refused, 1u);
+  b.Run(100);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
+  // A frame with another key is not a hold.
+  b.node.HandleFrame(Encode(BootHold{0x12345678u}, 1));
+  b.Drain();
+  VT_EXPECT_TRUE(Last<BootResult>(vt_context, b).error == BootError::kBadRequest);
+  VT_EXPECT_TRUE(!b.node.EnterBootloaderNow());
+  // Stopped, at rest: accepted. A configuration change waiting for the tick is applied
+  // (and would be stored) before the board leaves.
+  b.node.HandleFrame(Encode(Command{CommandCode::kStop, 2}, 1));
+  b.Run(2);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
+  b.node.HandleFrame(Encode(ParamWrite{ParamId::kPositionKp, 35 << 16}, 1));
+  b.node.HandleFrame(Encode(BootHold{}, 1));
+  b.Drain();
+  r = Last<BootResult>(vt_context, b);
+  VT_EXPECT_TRUE(r.request == BootRequest::kHold && r.error == BootError::kNone);
+  VT_EXPECT_TRUE(!b.node.EnterBootloaderNow());
+  b.Run(1);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOk);
+  VT_EXPECT_TRUE(b.node.EnterBootloaderNow());
+  // Leaving: no motion starts any more.
+  const int before = b.results_n;
+  StartLongTrial(b, 3);
+  VT_EXPECT_EQ(b.results_n, before + 1);
+  VT_EXPECT_TRUE(b.results[before].outcome == CommandOutcomeCode::kRefusedBusy);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
+}
+
+MJC_VECTOR_TEST(CanNode, ABoardWithoutABootloaderIgnoresAHold) {
+  static Board b;
+  b.node.HandleFrame(Encode(BootHold{}, 1));
+  b.Run(1);
+  VT_EXPECT_EQ(Sent<BootResult>(b), 0u);
+  VT_EXPECT_EQ(b.node.counters().ignored, 1u);
+  VT_EXPECT_TRUE(!b.node.EnterBootloaderNow());
+}
+
+// A port that keeps what the board sent, in order.
+class ListPort final : public hal::CanPort {
+ public:
+  CanFrame in[4];
+  int in_n = 0;
+  int in_at = 0;
+  std::uint32_t sent = 0;
+  std::uint32_t boot_results_sent = 0;
+
+ private:
+  bool DoSend(const CanFrame& f) override {
+    ++sent;
+    if (FunctionOf(f.id) == static_cast<std::uint8_t>(Function::kBootResult)) {
+      ++boot_results_sent;
+    }
+    return true;
+  }
+  bool DoReceive(CanFrame* f) override {
+    if (in_at == in_n) return false;
+    *f = in[in_at++];
+    return true;
+  }
+  std::uint32_t DoTakeBusOff() override { return 0; }
+  hal::CanPortCounters DoCounters() const override { return {}; }
+};
+
+class SpyEntry final : public hal::BootEntry {
+ public:
+  explicit SpyEntry(const ListPort* port) : port_(port) {}
+  int calls = 0;
+  std::uint32_t answers_out = 0;  // BootResults with the port when it was called
+
+ private:
+  void DoEnterBootloader() override {
+    ++calls;
+    answers_out = port_->boot_results_sent;
+  }
+  const ListPort* port_;
+};
+
+MJC_VECTOR_TEST(JointBoard, EntersItsBootloaderOnceTheHoldsAnswerIsOut) {
+  static ListPort port;
+  static SpyEntry entry(&port);
+  JointBoardConfig config{ControlConfig{}, {}, 0, 1};
+  static JointBoard board(config, &port, nullptr, &entry);
+  QuietIo io;
+  for (int i = 0; i < 20; ++i) {
+    board.ISR_Tick(io);
+    board.Poll();
+  }
+  VT_EXPECT_EQ(entry.calls, 0);
+  port.in[port.in_n++] = Encode(BootHold{}, 1);
+  board.ISR_Tick(io);
+  board.Poll();
+  VT_EXPECT_EQ(entry.calls, 1);
+  VT_EXPECT_EQ(entry.answers_out, 1u);
 }
 
 }  // namespace

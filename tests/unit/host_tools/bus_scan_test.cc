@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "mjc/host/describe.h"
 #include "mjc/protocol/codec.h"
 
 namespace {
@@ -80,6 +81,53 @@ TEST(BusScan, ABoardWithoutHeartbeatsIsShownByItsBoardInfo) {
   scan.Handle(Info(4, 0x4444));
   EXPECT_TRUE(scan.Complete());
   EXPECT_FALSE(scan.nodes().at(4).heartbeat);
+}
+
+protocol::CanFrame Status(std::uint8_t node, std::uint32_t tick_ms) {
+  protocol::BootStatus s;
+  s.state = protocol::BootState::kReady;
+  s.reason = protocol::StayReason::kNoValidImage;
+  s.error = protocol::BootError::kImageCrc;
+  s.tick_ms = tick_ms;
+  return protocol::Encode(s, node);
+}
+
+TEST(BusScan, ABootloaderIsShownAfterASecondAndATenthOfItsClock) {
+  // It sends its BoardInfo once a second, its BootStatus (with its clock) ten times.
+  // Heard first between two of its BoardInfo frames.
+  BusScan scan;
+  for (std::uint32_t ms = 0; ms <= 500; ms += 100) scan.Handle(Status(5, 300 + ms));
+  EXPECT_FALSE(scan.Complete());
+  protocol::BoardInfo info;
+  info.image = protocol::ImageKind::kBootloader;
+  info.build = 0xb0071234;
+  info.instance = 0x5151;
+  scan.Handle(protocol::Encode(info, 5));
+  for (std::uint32_t ms = 600; ms <= 1000; ms += 100) scan.Handle(Status(5, 300 + ms));
+  EXPECT_FALSE(scan.Complete());  // a second: a second board may not have spoken yet
+  scan.Handle(Status(5, 300 + 1100));
+  EXPECT_TRUE(scan.Complete());
+  const ScannedNode& n = scan.nodes().at(5);
+  EXPECT_TRUE(n.in_bootloader());
+  ASSERT_TRUE(n.boot_status);
+  EXPECT_EQ(n.boot_status->error, protocol::BootError::kImageCrc);
+  EXPECT_EQ(DescribeBootStatus(*n.boot_status), "ready (no valid image: image_crc)");
+}
+
+TEST(BusScan, TwoBootloadersWithOneIdAreReported) {
+  BusScan scan;
+  protocol::BoardInfo info;
+  info.image = protocol::ImageKind::kBootloader;
+  info.instance = 0x1111;
+  scan.Handle(protocol::Encode(info, 6));
+  info.instance = 0x2222;
+  for (std::uint32_t ms = 0; ms < 600; ms += 100) {
+    scan.Handle(Status(6, 5000 + ms));
+    scan.Handle(Status(6, 40 + ms));  // the other's clock, started later
+    if (ms == 300) scan.Handle(protocol::Encode(info, 6));
+  }
+  EXPECT_TRUE(scan.nodes().at(6).identity.ambiguous());
+  EXPECT_TRUE(scan.Complete());
 }
 
 }  // namespace

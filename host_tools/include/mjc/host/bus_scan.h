@@ -1,6 +1,6 @@
-// Every board on a bus, heard without asking (mjc list): their heartbeats and
-// BoardInfo frames, per node id, with two boards answering for one id told apart
-// (BoardIdentity).
+// Every board on a bus, heard without asking (mjc list, mjc flash): their heartbeats,
+// bootloaders' BootStatus and BoardInfo frames, per node id, with two boards answering
+// for one id told apart (BoardIdentity).
 #pragma once
 
 #include <atomic>
@@ -19,13 +19,24 @@ namespace mjc::host {
 struct ScannedNode {
   BoardIdentity identity;
   std::optional<protocol::Heartbeat> heartbeat;  // the last one
-  int infos = 0;                                 // BoardInfo frames heard
-  std::uint64_t frames = 0;                      // frames the node sent
+  // The last BootStatus: the node runs its bootloader when its last BoardInfo says so
+  // (in_bootloader()).
+  std::optional<protocol::BootStatus> boot_status;
+  // Its clock was last read from a BootStatus (a bootloader's), not a heartbeat.
+  bool bootloader_clock = false;
+  int infos = 0;             // BoardInfo frames heard
+  std::uint64_t frames = 0;  // frames the node sent
   // It has shown every board behind its id: its clock advanced 1.1 BoardInfo periods
-  // since first heard (each board answering for it sent a BoardInfo meanwhile), or it
-  // sent three BoardInfo frames (two periods, for a board without heartbeats), or 30
-  // heartbeats (three seconds at the default 10 Hz: a board whose clock does not move).
+  // since first heard (each board answering for it sent a BoardInfo meanwhile: 110 ms
+  // of an application's time, 1.1 s of a bootloader's, which sends one a second and its
+  // clock in its BootStatus), or it sent three BoardInfo frames (two periods, for a
+  // board without heartbeats), or 30 heartbeats or BootStatus frames (three seconds at
+  // 10 Hz: a board whose clock does not move).
   bool shown = false;
+
+  bool in_bootloader() const {
+    return identity.info() && identity.info()->image == protocol::ImageKind::kBootloader;
+  }
 };
 
 class BusScan {

@@ -29,6 +29,17 @@ std::string_view ResetCauseName(protocol::ResetCause cause);
 // from a tree with uncommitted changes ("1958ba84+dirty").
 std::string BuildName(std::uint32_t commit, bool dirty);
 
+// The bootloader's words: its state ("hold window", "ready", "receiving",
+// "committed"), why it stays ("no valid image", "held by a host", …) and its errors by
+// their stable names ("image_crc", "unexpected_offset", …; the image checks' names are
+// mjc-image's).
+std::string_view BootStateName(protocol::BootState state);
+std::string_view StayReasonName(protocol::StayReason reason);
+std::string_view BootErrorName(protocol::BootError error);
+// A BootStatus in a few words, as mjc list shows a board in its bootloader: "ready (no
+// valid image: no_image)", "ready (held by a host)", "receiving 41%", "committed".
+std::string DescribeBootStatus(const protocol::BootStatus& status);
+
 // The one wording of an absent or silent node, with the checks to make: "node 5 is
 // silent (is the board powered and on vcan0? try mjc list)".
 std::string SilentNode(int node, std::string_view iface);

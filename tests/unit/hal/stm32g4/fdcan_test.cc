@@ -133,6 +133,18 @@ TEST(Stm32g4Fdcan, SendWritesTheTxElement) {
   EXPECT_EQ(can->counters().sent, 2u);
 }
 
+TEST(Stm32g4Fdcan, TransmitIsIdleOnlyWithEveryTxElementFree) {
+  // TXFQS.TFFL (bits 2:0): free elements of the three-element TX FIFO (RM0440 §44.4).
+  ScriptedSpace s;
+  auto can = Started(s);
+  s.memory[kTxfqs] = (1u << 16) | 3u;
+  EXPECT_TRUE(can->TransmitIdle());
+  s.memory[kTxfqs] = (2u << 16) | (1u << 8) | 2u;  // one frame still queued
+  EXPECT_FALSE(can->TransmitIdle());
+  s.memory[kTxfqs] = 1u << 21;  // full
+  EXPECT_FALSE(can->TransmitIdle());
+}
+
 TEST(Stm32g4Fdcan, ReceiveDrainsFifo0) {
   ScriptedSpace s;
   auto can = Started(s);

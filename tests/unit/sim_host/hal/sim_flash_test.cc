@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -153,6 +154,56 @@ TEST(SimFlash, AnInterruptedEraseLeavesThePageNeitherOldNorErased) {
   EXPECT_GT(distinct, 200);  // random bytes, not a pattern the old page or erase leaves
   EXPECT_EQ(flash.ErasePage(0), FlashResult::kOk);  // a whole erase repairs it
   EXPECT_TRUE(PageErased(flash, 0));
+}
+
+std::vector<std::uint8_t> FileBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<std::uint8_t> out;
+  for (int c; (c = in.get()) != EOF;) out.push_back(static_cast<std::uint8_t>(c));
+  return out;
+}
+
+TEST(SimFlash, WritesEachOperationWhereItChangedTheFile) {
+  const std::string path = ::testing::TempDir() + "/mjc_flash_ops.bin";
+  std::remove(path.c_str());
+  {
+    SimFlash flash(4, path);
+    EXPECT_TRUE(flash.mirrored());
+    // A new file is the whole flash, erased, at once.
+    EXPECT_EQ(FileBytes(path), std::vector<std::uint8_t>(4 * 2048, 0xFF));
+    // Bytes changed behind its back (page 3) stay as they are: a program of page 1
+    // writes its own double-word only, an erase of page 2 its own page only.
+    {
+      std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+      f.seekp(3 * 2048 + 5);
+      f.put(0x42);
+    }
+    ASSERT_EQ(flash.ProgramDoubleWord(1, 16, 0x0123456789ABCDEFull), FlashResult::kOk);
+    ASSERT_EQ(flash.ErasePage(2), FlashResult::kOk);
+    const auto bytes = FileBytes(path);
+    ASSERT_EQ(bytes.size(), 4u * 2048);
+    EXPECT_EQ(bytes[3 * 2048 + 5], 0x42);
+    EXPECT_EQ(bytes[2048 + 16], 0xEF);
+    EXPECT_EQ(bytes[2048 + 23], 0x01);
+    EXPECT_EQ(flash.file_errors(), 0);
+  }
+  std::remove(path.c_str());
+}
+
+TEST(SimFlash, AFileOfAnotherSizeIsLeftUntouched) {
+  const std::string path = ::testing::TempDir() + "/mjc_flash_other.bin";
+  std::vector<std::uint8_t> other(3000, 0x5A);
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(other.data()),
+             static_cast<std::streamsize>(other.size()));
+  std::string why;
+  SimFlash flash(2, path, &why);
+  EXPECT_FALSE(flash.mirrored());
+  EXPECT_EQ(why, path + " holds 3000 bytes, not 4096: left untouched");
+  ASSERT_EQ(flash.ErasePage(0), FlashResult::kOk);
+  ASSERT_EQ(flash.ProgramDoubleWord(0, 0, 7), FlashResult::kOk);
+  EXPECT_EQ(FileBytes(path), other);
+  std::remove(path.c_str());
 }
 
 }  // namespace

@@ -42,6 +42,10 @@ struct CanNodeConfig {
   // Who the board is (BoardInfo): sent at the first poll and then at rates.info_hz. The
   // board fills in its build, its reset cause and its instance.
   protocol::BoardInfo identity;
+  // The board has a bootloader to enter on a host's BootHold (JointBoard sets it when it
+  // is given a hal::BootEntry). Without one a BootHold is ignored, as on a board whose
+  // filters do not take it.
+  bool bootloader = false;
 };
 
 struct CanNodeCounters {
@@ -56,6 +60,7 @@ struct CanNodeCounters {
   std::uint32_t stream_timeouts = 0;
   std::uint32_t host_timeouts = 0;
   std::uint32_t bus_off = 0;  // bus-off events the driver reported (each one stops us)
+  std::uint32_t boot_holds_refused = 0;  // BootHolds answered kMotionRunning
   std::uint32_t isotp_errors = 0;  // transfers dropped (sequence, timeout, overflow)
   std::uint32_t calibrations_accepted = 0;
   std::uint32_t calibrations_refused = 0;
@@ -90,6 +95,12 @@ class CanNode {
   // ClearFaults from the host, which proves the bus works again.
   void OnBusOff();
 
+  // A host's BootHold was accepted (the board rests, nothing waits to be applied and
+  // saved, the answer is queued): the board should now enter its bootloader
+  // (hal::BootEntry), once the queued frames have gone to the port. From the hold on,
+  // starts and calibrations are refused as busy.
+  bool EnterBootloaderNow() const { return leaving_ && !config_change_pending_; }
+
   CanNodeCounters counters() const;
   const CanNodeConfig& config() const { return config_; }
 
@@ -118,6 +129,8 @@ class CanNode {
   void Answer(RequestTag tag, const CommandOutcome& outcome);
   void OnVerdict(const AppEvent& e);
   void Supervise(const JointApp::Snapshot& last);
+  // A host asks the board into its bootloader: accepted only at rest.
+  void HandleBootHold(const protocol::BootHold& hold);
   // Parameters (can_node_params.cc).
   void HandleParam(protocol::ParamId id, bool write, std::int32_t value);
   void SendParam(protocol::ParamId id, protocol::ParamStatus status);
@@ -158,6 +171,8 @@ class CanNode {
   protocol::SessionId start_session_ = 0;
   protocol::SessionId motion_session_ = 0;
   std::uint32_t last_host_tick_ = 0;
+  // A BootHold was accepted: the board is on its way into the bootloader.
+  bool leaving_ = false;
 };
 
 }  // namespace mjc::app

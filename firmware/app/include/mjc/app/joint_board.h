@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <optional>
 
+#include "hal/boot_entry.h"
 #include "hal/can_port.h"
 #include "hal/flash.h"
 #include "hal/joint_io.h"
@@ -35,9 +36,11 @@ class JointBoard {
   // 100 µs tick; a flood beyond what a bus can carry must not starve the main loop.
   static constexpr int kMostFramesPerPoll = 32;
 
-  // `port` and `flash` must outlive the board; either may be null (a board without a
-  // bus: its frames are dropped; without flash: nothing persists).
-  JointBoard(const JointBoardConfig& config, hal::CanPort* port, hal::Flash* flash);
+  // `port`, `flash` and `boot` must outlive the board; each may be null (a board without
+  // a bus: its frames are dropped; without flash: nothing persists; without a
+  // bootloader: a host's BootHold is ignored).
+  JointBoard(const JointBoardConfig& config, hal::CanPort* port, hal::Flash* flash,
+             hal::BootEntry* boot = nullptr);
 
   // Start-up, in the main loop before the tick runs: hands the newest stored
   // calibration to the app (it takes effect at the first tick) and returns it; nullopt
@@ -53,7 +56,9 @@ class JointBoard {
 
   // One pass of the main loop: the port's bus-off reports and received frames in, the
   // node's poll (verdicts, events, telemetry, timeouts), its frames out as far as the
-  // port takes them (the rest wait, in order, for the next pass).
+  // port takes them (the rest wait, in order, for the next pass). Last, when a host's
+  // BootHold was accepted, the board enters its bootloader (hal::BootEntry): on the chip
+  // this pass does not return.
   void Poll();
 
   // A fault whose cause stays for the whole run (the board did not come up whole:
@@ -72,6 +77,7 @@ class JointBoard {
   std::optional<CalibrationStore> store_;
   CanNode node_;
   hal::CanPort* port_;
+  hal::BootEntry* boot_;
   protocol::CanFrame held_;  // a frame the port had no room for
   bool holding_ = false;
   Fault held_fault_ = Fault::kNone;

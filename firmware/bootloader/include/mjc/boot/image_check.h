@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 #include "mjc/boot/app_region.h"
 #include "mjc/boot/image_header.h"
@@ -30,6 +31,12 @@ ImageCheck CheckVectors(std::uint32_t stack_pointer, std::uint32_t reset_handler
 // when the flash cannot be read.
 bool RegionCrc(const AppRegion& region, std::uint32_t offset, std::uint32_t length,
                ServiceHook service, std::uint32_t* crc);
+
+// The header at the region's start when its structure checks out (DecodeHeader: magic,
+// version, header CRC, commit mark); nullopt otherwise. What a running application
+// reads to report the build it was installed as (its BoardInfo): the bootloader checked
+// the rest before it handed over.
+std::optional<ImageHeader> ReadInstalledHeader(const AppRegion& region);
 
 // The whole check of what the region holds, for a board that accepts `target`.
 InstalledImage CheckInstalledImage(const AppRegion& region, const ImageTarget& target,

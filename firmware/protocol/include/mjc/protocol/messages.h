@@ -284,7 +284,8 @@ enum class StayReason : std::uint8_t {
 constexpr bool ValidEnumValue(StayReason r) { return static_cast<std::uint8_t>(r) <= 5; }
 
 // Errors of the bootloader. Stable numbers, never renumbered; 1-8 are the image
-// checks (mjc::boot::ImageCheck, the same numbers).
+// checks (mjc::boot::ImageCheck, the same numbers), 16-31 the update's, 32 and up the
+// running application's answers to a BootHold.
 enum class BootError : std::uint8_t {
   kNone = 0,
   kNoImage = 1,            // no header: erased, or no magic
@@ -304,10 +305,12 @@ enum class BootError : std::uint8_t {
   kTransfer = 22,          // the ISO-TP transfer failed (sequence, timeout, overflow)
   kBadRequest = 23,        // an unknown or malformed request
   kNothingToBoot = 24,     // a boot request without a valid image
+  // The running application's answer to a BootHold (it does not enter the bootloader):
+  kMotionRunning = 32,  // a trial, calibration sweep or stream runs: stop it first
 };
 constexpr bool ValidEnumValue(BootError e) {
   const auto v = static_cast<std::uint8_t>(e);
-  return v <= 8 || (v >= 16 && v <= 24);
+  return v <= 8 || (v >= 16 && v <= 24) || v == 32;
 }
 
 // What a BootResult answers. Stable numbers.

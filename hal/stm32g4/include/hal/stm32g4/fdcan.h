@@ -119,6 +119,11 @@ class Stm32g4Fdcan final : public hal::CanPort {
   // FDCAN1_IT1 (IRQ 22): bus-off → counted, recovery started.
   void ISR_Line1();
 
+  // True once every frame given to Send has left the controller: all TX FIFO elements
+  // free (TXFQS.TFFL = 3). Any context; for a board about to reset that wants its last
+  // answer out first.
+  bool TransmitIdle() const;
+
  private:
   bool DoSend(const protocol::CanFrame& frame) override;
   bool DoReceive(protocol::CanFrame* frame) override;

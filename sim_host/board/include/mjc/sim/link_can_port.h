@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "hal/can_port.h"
@@ -25,6 +26,11 @@ class LinkCanPort final : public hal::CanPort {
   // Frames the link could not send (each one lost, as a controller that gives up).
   std::uint32_t send_failures() const { return send_failures_; }
 
+  // Waits up to timeout_ms for a frame, kept for the next Receive: true when one is
+  // there. For a board with nothing to do until a frame comes (the simulated
+  // bootloader), which then answers at once instead of at its next pass.
+  bool WaitForFrame(int timeout_ms);
+
  private:
   bool DoSend(const protocol::CanFrame& frame) override;
   bool DoReceive(protocol::CanFrame* frame) override;
@@ -32,6 +38,7 @@ class LinkCanPort final : public hal::CanPort {
   hal::CanPortCounters DoCounters() const override;
 
   host::CanLink* link_;
+  std::optional<protocol::CanFrame> waiting_;  // taken by WaitForFrame
   std::uint64_t bus_off_seen_;
   std::uint32_t received_ = 0;
   std::uint32_t send_failures_ = 0;

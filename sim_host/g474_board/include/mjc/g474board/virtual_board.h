@@ -64,7 +64,7 @@ namespace mjc::g474board {
 
 struct VirtualBoardConfig {
   plant::PlantParams plant;
-  std::uint8_t node = 1;
+  std::uint8_t node = 1;  // when the flash holds no identity record (RunOptions::node)
   // The FLASH model's array is loaded from and saved to this file ("" = none; created
   // when missing): the calibration survives a restart of the program. An existing file
   // of another size is refused (the constructor throws), never overwritten.
