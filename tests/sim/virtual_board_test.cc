@@ -10,6 +10,9 @@
 //    commit, the power-on reset and the instance folded from the chip's unique ID. The
 //    start is confirmed to the bootloader (the handoff block) after 2 s of ticks, not
 //    before.
+//  - A host's BootHold at rest is answered and the application leaves for its
+//    bootloader as on the chip: the stay request in the handoff block, a software reset
+//    (no bootloader precedes the virtual board: its application starts again).
 //  - A calibration uploaded over ISO-TP is programmed into the FLASH model, survives a
 //    power cut (read back over the bus after the reboot) and a restart of the program
 //    (the flash file); a flash file of another size is refused and left as it was.
@@ -26,6 +29,7 @@
 #include <array>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <vector>
@@ -72,6 +76,23 @@ std::vector<CanFrame> Drain(host::CanLink& link) {
   return frames;
 }
 
+// The first frame from the board `node` on `link` that `take` accepts; nullopt once the
+// board has run 10 s of its own time (its heartbeats' ticks) without one.
+std::optional<CanFrame> AwaitFrame(host::CanLink& link, std::uint8_t node,
+                                   const std::function<bool(const CanFrame&)>& take) {
+  std::optional<std::uint32_t> first_tick;
+  for (;;) {
+    const auto r = link.Receive(100);
+    if (!r) continue;
+    Heartbeat beat;
+    if (NodeOf(r->frame.id) == node && Decode(r->frame, &beat) == DecodeError::kOk) {
+      if (!first_tick) first_tick = beat.tick;
+      if (beat.tick - *first_tick > 10 * kBoardTickHz) return std::nullopt;
+    }
+    if (take(r->frame)) return r->frame;
+  }
+}
+
 // A calibration record to `node` over ISO-TP on the in-process bus, segmented as the
 // kernel's sender does (a first frame, then consecutive frames; classical frames, no
 // padding). The frames go out together, which the board's flow control allows (block
@@ -102,20 +123,12 @@ std::optional<std::array<std::uint8_t, 2>> Upload(host::CanLink& link, std::uint
     std::copy_n(bytes.begin() + static_cast<std::ptrdiff_t>(at), n, f.data.begin() + 1);
     if (!link.Send(f, nullptr)) return std::nullopt;
   }
-  std::optional<std::uint32_t> first_tick;
-  for (;;) {
-    const auto r = link.Receive(100);
-    if (!r) continue;
-    Heartbeat beat;
-    if (NodeOf(r->frame.id) == node && Decode(r->frame, &beat) == DecodeError::kOk) {
-      if (!first_tick) first_tick = beat.tick;
-      if (beat.tick - *first_tick > 10 * kBoardTickHz) return std::nullopt;
-    }
-    // The answer is a single frame of two bytes; the flow control (0x30) is not.
-    if (r->frame.id == from_board && r->frame.data[0] == 0x02) {
-      return std::array<std::uint8_t, 2>{r->frame.data[1], r->frame.data[2]};
-    }
-  }
+  // The answer is a single frame of two bytes; the flow control (0x30) is not.
+  const auto answer = AwaitFrame(link, node, [&](const CanFrame& frame) {
+    return frame.id == from_board && frame.data[0] == 0x02;
+  });
+  if (!answer) return std::nullopt;
+  return std::array<std::uint8_t, 2>{answer->data[1], answer->data[2]};
 }
 
 // Until the board's first heartbeat: it is on the bus (a frame sent before its CAN
@@ -200,6 +213,39 @@ TEST(VirtualBoard, ConfirmsAHealthyStartAfterTwoSeconds) {
   EXPECT_TRUE(board.violations().empty()) << Violations(board);
 }
 
+TEST(VirtualBoard, EntersItsBootloaderOnAHostsHold) {
+  auto bus = host::InProcessBus::Create();
+  auto board_link = bus->Connect();
+  auto host_link = bus->Connect();
+  g474board::VirtualBoard board(Config(plant::LoadPlantParams("default")),
+                                board_link.get());
+  board.Resume();
+  host::BoardClient client(host_link.get(), 1);
+  AwaitUp(client);
+
+  // At rest, a BootHold is answered {hold, none}; then the board leaves its
+  // application: the stay request in the handoff block, a software reset. With no
+  // bootloader in front of it, the virtual board starts its application again.
+  auto answer_link = bus->Connect();
+  std::string why;
+  ASSERT_TRUE(client.Send(BootHold{}, &why)) << why;
+  BootResult result;
+  ASSERT_TRUE(AwaitFrame(*answer_link, 1, [&](const CanFrame& f) {
+    return NodeOf(f.id) == 1 && Decode(f, &result) == DecodeError::kOk;
+  })) << "no BootResult";
+  EXPECT_EQ(result.request, BootRequest::kHold);
+  EXPECT_EQ(result.error, BootError::kNone);
+  board.Halt();
+  board.RunUntil(board.now_s() + 0.2);
+  EXPECT_EQ(board.Summary().resets, 1);
+  ASSERT_NE(board.firmware(), nullptr);
+  EXPECT_EQ(board.firmware()->node().config().identity.reset_cause,
+            ResetCause::kSoftware);
+  EXPECT_TRUE(boot::TakeStayRequest(board::Handoff(), /*software_reset=*/true));
+  board.Stop();
+  EXPECT_TRUE(board.violations().empty()) << Violations(board);
+}
+
 TEST(VirtualBoard, KeepsAnUploadedCalibrationOverAPowerCutAndARestart) {
   const TempFile flash("power_cut.flash");
   auto bus = host::InProcessBus::Create();
@@ -252,7 +298,7 @@ TEST(VirtualBoard, KeepsAnUploadedCalibrationOverAPowerCutAndARestart) {
     EXPECT_TRUE(board::LastBoot().calibration_restored);
     EXPECT_EQ(board::LastBoot().calibration_sequence, 1u);
   }
-  // A file that is not a G474 flash (mjc sim's flash file is two pages) is refused
+  // A file that is not a G474 flash (here two pages, as mjc sim's once was) is refused
   // before anything is written to it.
   const TempFile other("two_pages.flash");
   std::ofstream(other.path, std::ios::binary) << std::string(4096, '\x5A');
