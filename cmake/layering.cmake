@@ -16,6 +16,12 @@ mjc_forbid_dependency(mjc_protocol "^mjc_(hal|app|host|plant|sim|scenarios|g474)
 mjc_forbid_dependency(mjc_app
   "^mjc_(plant|sim_|scenarios|host|strict_json|hal_stm32g4|g474)")
 
+if(TARGET mjc_gpio)
+  # The host's GPIO lines are lines: what they mean for the boards is the host tools'.
+  mjc_forbid_dependency(mjc_gpio
+    "^mjc_(core|hal|protocol|app|host|plant|sim|scenarios|bootloader|boot_|image|g474)")
+endif()
+
 if(TARGET mjc_plant)
   # The plant is physics: it must not replay the firmware's application or talk CAN.
   mjc_forbid_dependency(mjc_plant "^mjc_(app|protocol|host|sim_board|scenarios|hal)")

@@ -63,6 +63,7 @@ void AddCalibrate(CLI::App& app) {
   static int node = 1, cycles = 10;
   static double amplitude_deg = 30, frequency_hz = 0.5;
   static bool upload = true;
+  static EstopOptions estop_options;
   AddIfaceOption(cmd, &iface);
   AddNodeOption(cmd, &node);
   cmd->add_option("--amplitude-deg", amplitude_deg, "Final sweep amplitude")
@@ -75,6 +76,7 @@ void AddCalibrate(CLI::App& app) {
       ->check(InRange(2, 255))
       ->capture_default_str();
   AddOutputOptions(cmd, &output, "out/calibration");
+  AddEstopOptions(cmd, &estop_options, EstopDefault::kConfig);
   cmd->add_flag("!--no-upload", upload, "Fit and save only");
   cmd->callback([] {
     host::OutputFolder folder;
@@ -103,6 +105,10 @@ void AddCalibrate(CLI::App& app) {
     host::WriteRunRecord(run, dir);  // also finds an unwritable folder now
     // Every way out says how the run ended in run.json, then the Failure.
     std::optional<int> fault;
+    // The emergency-stop watch, from before anything moves to the end of the sweep.
+    std::unique_ptr<host::EmergencyStopThread> estop;
+    const auto stopped_by_estop = [&] { return estop && estop->triggered(); };
+    bool estop_said = false;  // the Failure thrown already tells of the emergency stop
     try {
       auto link = OpenLink(iface);
       // Heartbeats flow while the sweep runs: if this tool dies, the board stops it.
@@ -113,6 +119,8 @@ void AddCalibrate(CLI::App& app) {
       // that arrived are saved.
       const std::atomic<bool>& interrupted = StopOnSignals();
       board.SetInterrupt(&interrupted);
+      estop =
+          StartEstop(estop_options, iface, "mjc calibrate", board.session(), &StopFlag());
       const std::string who = "node " + std::to_string(node);
       std::string why;
       // Who it is (one board, its build), in run.json before anything moves.
@@ -202,14 +210,21 @@ void AddCalibrate(CLI::App& app) {
       // The stop first (the motor must not wait for a file), then the samples, kept
       // however the sweep ended. Two boards answering for the node may both be moving:
       // both are told.
-      const std::string stopped = !ended && (end == host::WaitEnd::kInterrupted ||
-                                             end == host::WaitEnd::kAmbiguous)
-                                      ? StopMotion(board)
-                                      : "";
+      const std::string stopped =
+          !ended && !stopped_by_estop() &&
+                  (end == host::WaitEnd::kInterrupted || end == host::WaitEnd::kAmbiguous)
+              ? StopMotion(board)
+              : "";
       const std::filesystem::path sweep_path = dir / "sweep.csv";
       WriteSweep(sweep_path, *rate_hz, motor, joint);
       const std::string kept = "; " + std::to_string(motor.size()) +
                                " sweep samples saved to " + sweep_path.string();
+      if (stopped_by_estop()) {
+        estop_said = true;
+        throw Failure(Exit::kStopped,
+                      ConfirmEmergencyStop(board, *estop) + kept + " (not fitted)");
+      }
+      estop.reset();  // the motion is over
       if (!ended) {
         switch (end) {
           case host::WaitEnd::kLinkFailed:
@@ -304,6 +319,12 @@ void AddCalibrate(CLI::App& app) {
                   node, sent.elapsed_ms, out_path.c_str());
     } catch (const Failure& f) {
       EndProgress();
+      if (stopped_by_estop()) {
+        run.end = {"emergency_stop", std::nullopt,
+                   estop_said ? f.what() : EstopWhat(*estop) + "; " + f.what()};
+        host::WriteRunRecord(run, dir);
+        throw Failure(Exit::kStopped, run.end.message);
+      }
       run.end = {OutcomeOf(f.exit()), fault, f.what()};
       host::WriteRunRecord(run, dir);
       throw;

@@ -17,9 +17,11 @@
 #include <string>
 #include <type_traits>
 
+#include "mjc/gpio/line_spec.h"
 #include "mjc/host/board_client.h"
 #include "mjc/host/can_link.h"
 #include "mjc/host/config.h"
+#include "mjc/host/emergency_stop.h"
 #include "mjc/protocol/can_frame.h"
 
 namespace mjc::cli {
@@ -50,17 +52,19 @@ enum class Exit : int {
 // The footer of every --help.
 inline constexpr const char* kExitStatusHelp =
     "Exit status: 0 done; 1 failed on this side (input or output file, interface, "
-    "link, unusable fit, gnuplot); 2 bad command line; 3 a node did not answer, went "
-    "silent or did not finish in time; 4 the board refused, holds no calibration or "
-    "did not keep what was sent; 5 the board faulted; 6 the motion was stopped before "
-    "its end (interrupted: the board was stopped and what arrived is saved; or stopped "
-    "by another tool); 7 two boards answer with one node id (nothing was done to it; "
-    "give each board its own id); 8 mjc flash: a board was not updated (named; it waits "
+    "link, GPIO line, unusable fit, gnuplot); 2 bad command line; 3 a node did not "
+    "answer, went silent or did not finish in time; 4 the board refused, holds no "
+    "calibration or did not keep what was sent; 5 the board faulted; 6 the motion was "
+    "stopped before its end (interrupted: the board was stopped and what arrived is "
+    "saved; stopped by another tool; or by the emergency stop); 7 two boards answer "
+    "with one node id (nothing was done to it; give each board its own id); 8 mjc flash: "
+    "a board was not updated (named; it waits "
     "in its bootloader: run mjc flash again).\n"
     "Defaults: --iface from MJC_IFACE, else the config file's \"iface\", else vcan0; "
-    "--node from its \"node\", else 1. The config file is $MJC_CONFIG, else "
-    "~/.config/mjc/config.json (JSON: {\"iface\": \"can0\", \"node\": 2}; an unknown "
-    "key is an error). The command line wins.\n"
+    "--node from its \"node\", else 1; GPIO lines (CHIP:LINE) from its \"estop_line\", "
+    "\"estop_active\", \"sync_line\" and \"reset_lines\". The config file is "
+    "$MJC_CONFIG, else ~/.config/mjc/config.json (JSON: {\"iface\": \"can0\", "
+    "\"node\": 2}; an unknown key is an error). The command line wins.\n"
     "No CAN interface on this machine? scripts/kernel-vm shell starts a virtual machine "
     "with vcan0 and this tree mounted.";
 
@@ -213,6 +217,10 @@ inline std::atomic<bool> g_stop{false};
 inline void OnStopSignal(int) { g_stop = true; }
 }  // namespace detail
 
+// The flag StopOnSignals returns, for what else ends a command's waits the same way
+// (the emergency-stop watch).
+inline std::atomic<bool>& StopFlag() { return detail::g_stop; }
+
 // Makes SIGINT, SIGTERM and SIGHUP (Ctrl-C, kill, a closed terminal) end a
 // long-running command cleanly — a motion it started stopped, files flushed, counts
 // printed: the returned flag turns true when one arrives. Without SA_RESTART, so a
@@ -267,6 +275,106 @@ inline void IdentifyOrThrow(host::BoardClient& board, std::chrono::milliseconds 
 // (kAmbiguous, after the table), the link, a signal.
 void ListBoards(const std::string& iface, int silence_ms, bool json);
 
+// --- GPIO lines (README: GPIO lines) ---------------------------------------------
+
+// A CHIP:LINE option's check ("none" too, where `none` allows it: no line).
+inline CLI::Validator LineSpecCheck(bool none) {
+  return CLI::Validator(
+      [none](std::string& value) -> std::string {
+        if (none && value == "none") return std::string();
+        std::string why;
+        return gpio::ParseLineSpec(value, &why) ? std::string() : why;
+      },
+      none ? "CHIP:LINE or none" : "CHIP:LINE");
+}
+
+// The spec of a checked option's value; nullopt for "none" or empty.
+inline std::optional<gpio::LineSpec> LineOf(const std::string& value) {
+  std::string why;
+  if (value.empty() || value == "none") return std::nullopt;
+  return gpio::ParseLineSpec(value, &why);
+}
+
+// --estop-line and --estop-active: the emergency-stop button a command watches while
+// it runs. kConfig: the config file's "estop_line" is the default ("none" leaves it
+// unwatched: trial, calibrate); kGiven: watched only when given (monitor). mjc estop
+// names its option --line (kConfig; "none" means nothing there).
+enum class EstopDefault : std::uint8_t { kConfig, kGiven };
+struct EstopOptions {
+  std::string line;
+  std::string active = "high";
+};
+inline void AddEstopOptions(CLI::App* cmd, EstopOptions* options, EstopDefault from,
+                            const char* name = "--estop-line") {
+  const host::ToolConfig& config = Defaults();
+  const bool from_config = from == EstopDefault::kConfig;
+  const bool none = from_config && std::string_view(name) == "--estop-line";
+  if (from_config && config.estop_line) options->line = config.estop_line->text();
+  if (config.estop_active_low)
+    options->active = *config.estop_active_low ? "low" : "high";
+  cmd->add_option(name, options->line,
+                  std::string("Emergency-stop input CHIP:LINE (a chip's name, path, "
+                              "label or number; a line's offset or name): its edge into "
+                              "the active level sends StopAll to every node at once") +
+                      (none ? "; none: not watched" : ""))
+      ->check(LineSpecCheck(none))
+      ->capture_default_str();
+  cmd->add_option("--estop-active", options->active,
+                  "The emergency-stop line's active level (pressed, or a broken wire)")
+      ->check(CLI::IsMember({"high", "low"}))
+      ->capture_default_str();
+}
+
+// Starts watching options.line on a thread (nullptr when there is none), on a link of
+// its own on `iface`: a StopAll raises `raise` (the command's stop flag, ending its
+// waits; null for none). Throws Failure naming the line when it cannot be opened (no
+// chip, no line, held by another program).
+inline std::unique_ptr<host::EmergencyStopThread> StartEstop(const EstopOptions& options,
+                                                             const std::string& iface,
+                                                             const std::string& consumer,
+                                                             protocol::SessionId session,
+                                                             std::atomic<bool>* raise) {
+  const auto spec = LineOf(options.line);
+  if (!spec) return nullptr;
+  gpio::LineOptions line_options;
+  line_options.consumer = consumer;
+  line_options.active_low = options.active == "low";
+  std::string why;
+  auto line = gpio::OpenEdgeInput(*spec, line_options, &why);
+  if (!line) throw Failure("emergency-stop line: " + why);
+  host::EmergencyStopConfig config;
+  config.session = session;
+  return std::make_unique<host::EmergencyStopThread>(std::move(line), OpenLink(iface),
+                                                     config, raise);
+}
+
+// "emergency stop on gpiochip0:estop: every board was told to stop", or the watch's
+// failure.
+inline std::string EstopWhat(const host::EmergencyStopThread& estop) {
+  return (estop.error().empty()
+              ? "emergency stop on " + estop.line_name()
+              : "the emergency-stop line failed (" + estop.error() + ")") +
+         ": every board was told to stop";
+}
+
+// After an emergency stop during a motion of `board`: waits (1 s of its time at most,
+// or its silence) for the board to report the emergency-stop fault, and says so.
+inline std::string ConfirmEmergencyStop(host::BoardClient& board,
+                                        const host::EmergencyStopThread& estop) {
+  board.SetInterrupt(nullptr);
+  const std::string who = "node " + std::to_string(board.node());
+  const std::string what = EstopWhat(estop);
+  host::WaitEnd end{};
+  std::string why;
+  const std::chrono::milliseconds second{1000};
+  if (board.Await([&] { return board.status().fault == Fault::kEmergencyStop; },
+                  {second, second}, &end, &why)) {
+    return what + "; " + who + " stopped (fault 305, emergency stop: mjc clear --node " +
+           std::to_string(board.node()) + " releases it)";
+  }
+  return what + "; " + who + " did not confirm it (" + why + ")";
+}
+
 void AddSim(CLI::App& app);
 void AddLog(CLI::App& app);
 void AddCal(CLI::App& app);
@@ -279,5 +387,8 @@ void AddClear(CLI::App& app);
 void AddStop(CLI::App& app);
 void AddList(CLI::App& app);
 void AddFlash(CLI::App& app);
+
+void AddEstop(CLI::App& app);
+void AddReset(CLI::App& app);
 
 }  // namespace mjc::cli

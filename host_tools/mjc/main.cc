@@ -119,6 +119,8 @@ int main(int argc, char** argv) {
   mjc::cli::AddStop(app);
   mjc::cli::AddList(app);
   mjc::cli::AddFlash(app);
+  mjc::cli::AddEstop(app);
+  mjc::cli::AddReset(app);
   if (const std::string unknown = UnknownCommand(app, argc, argv); !unknown.empty()) {
     std::fprintf(stderr, "%s\n", unknown.c_str());
     return static_cast<int>(Exit::kUsage);

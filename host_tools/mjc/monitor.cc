@@ -47,6 +47,7 @@ void AddMonitor(CLI::App& app) {
   static double seconds = 0;
   static int interval_ms = 500;
   static bool json = false;
+  static EstopOptions estop_options;
   AddIfaceOption(cmd, &iface);
   AddNodeOption(cmd, &nodes, "Node ids");
   cmd->add_option("--seconds", seconds, "Stop after this long (0: until SIGINT)")
@@ -55,6 +56,8 @@ void AddMonitor(CLI::App& app) {
       ->check(InRange(50, 60000, "ms"))
       ->capture_default_str();
   cmd->add_flag("--json", json, "One JSON object per node (and bus report) and line");
+  // Watched only when given: a monitor runs beside a trial, which may watch it.
+  AddEstopOptions(cmd, &estop_options, EstopDefault::kGiven);
   cmd->callback([] {
     // A link per node: each client filters its link to its own node.
     std::vector<std::unique_ptr<host::SocketCanLink>> links;
@@ -68,6 +71,11 @@ void AddMonitor(CLI::App& app) {
     // Every link sees the interface's error frames: the first one's tell of them.
     SayBusOff(*boards.front(), "mjc monitor", iface);
     const std::atomic<bool>& stop = StopOnSignals();
+    // The monitor goes on after an emergency stop: it shows the boards' faults.
+    const auto estop = StartEstop(estop_options, iface, "mjc monitor",
+                                  boards.front()->session(), nullptr);
+    std::uint64_t estops_shown = 0;
+    std::string estop_error_shown;
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::chrono::steady_clock::time_point> last_heard(boards.size(), start);
     std::vector<std::uint32_t> last_tick(boards.size(), 0);
@@ -84,6 +92,21 @@ void AddMonitor(CLI::App& app) {
       const auto now = std::chrono::steady_clock::now();
       const auto wall = std::chrono::system_clock::now();
       const std::string stamp = Utc(wall, json);
+      if (estop &&
+          (estop->activations() != estops_shown || estop->error() != estop_error_shown)) {
+        estops_shown = estop->activations();
+        estop_error_shown = estop->error();
+        const std::string what = EstopWhat(*estop);
+        if (json) {
+          const nlohmann::json j = {{"time", stamp},
+                                    {"emergency_stop", estop->line_name()},
+                                    {"activations", estops_shown},
+                                    {"message", what}};
+          std::printf("%s\n", j.dump().c_str());
+        } else {
+          std::printf("%s %s\n", stamp.c_str(), what.c_str());
+        }
+      }
       for (std::size_t i = 0; i < boards.size(); ++i) {
         const host::BoardClient& b = *boards[i];
         const host::BoardStatus& s = b.status();

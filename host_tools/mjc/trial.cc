@@ -20,6 +20,7 @@
 #include "mjc/host/trial_report.h"
 #include "mjc/host/trial_runner.h"
 #include "mjc/host/units.h"
+#include "mjc/host/window_sync.h"
 
 namespace mjc::cli {
 namespace {
@@ -60,6 +61,8 @@ void AddTrial(CLI::App& app) {
   static double amplitude_deg = 25, frequency_hz = 0.5, rest_s = 1.5;
   static std::vector<double> amplitudes = {6, 8, 11, 15, 20, 25};
   static bool pause = false, figure = true;
+  static EstopOptions estop_options;
+  static std::string sync_name;
   AddIfaceOption(cmd, &iface);
   AddNodeOption(cmd, &node);
   cmd->add_option("--protocol", protocol_name, "repeatability or amplitude")
@@ -88,6 +91,14 @@ void AddTrial(CLI::App& app) {
   cmd->add_flag("--pause", pause, "Wait for Enter between trials (re-donning)");
   AddOutputOptions(cmd, &output, "out/trial");
   cmd->add_flag("!--no-figure", figure, "Tables and windows.csv only (no gnuplot)");
+  AddEstopOptions(cmd, &estop_options, EstopDefault::kConfig);
+  if (Defaults().sync_line) sync_name = Defaults().sync_line->text();
+  cmd->add_option("--sync-line", sync_name,
+                  "Trigger output CHIP:LINE for other instruments: high during flexion "
+                  "windows, low during extension windows and at rest, so every window "
+                  "start is an edge; none: no trigger")
+      ->check(LineSpecCheck(true))
+      ->capture_default_str();
   cmd->callback([] {
     host::OutputFolder folder;
     try {
@@ -131,7 +142,38 @@ void AddTrial(CLI::App& app) {
       host::WriteRunRecord(record, dir);
       return Failure(exit, what);
     };
+    // The trigger line: low (rest) from the start, back to low however the run ends.
+    std::unique_ptr<gpio::OutputLine> sync_line;
+    std::optional<host::WindowSync> sync;
+    std::string sync_error;
+    struct RestAtEnd {
+      std::optional<host::WindowSync>* sync;
+      ~RestAtEnd() {
+        std::string ignored;
+        if (*sync) (void)(*sync)->Rest(&ignored);
+      }
+    } rest_at_end{&sync};
+    // The emergency-stop watch, from before anything moves to the end of the run.
+    std::unique_ptr<host::EmergencyStopThread> estop;
+    const auto stopped_by_estop = [&] { return estop && estop->triggered(); };
+    // The run ended by the emergency stop: "emergency_stop" in run.json, exit 6.
+    const auto estop_end = [&](const std::string& what) {
+      EndProgress();
+      record.end.outcome = "emergency_stop";
+      record.end.message = what;
+      host::WriteRunRecord(record, dir);
+      return Failure(Exit::kStopped, what);
+    };
     try {
+      if (const auto spec = LineOf(sync_name)) {
+        gpio::LineOptions options;
+        options.consumer = "mjc trial sync";
+        std::string why;
+        sync_line = gpio::OpenOutput(*spec, options, &why);
+        if (!sync_line) throw Failure("sync line: " + why);
+        sync.emplace(sync_line.get());
+        if (!sync->Rest(&why)) throw Failure("sync line: " + why);
+      }
       auto link = OpenLink(iface);
       // Heartbeats flow while a trial runs: if this tool dies, the board stops it. The
       // --pause prompt waits with the board at rest, where their absence is harmless.
@@ -139,9 +181,20 @@ void AddTrial(CLI::App& app) {
                               host::HostHeartbeats::kSend);
       SayBusOff(board, "mjc trial", iface);
       // Ctrl-C (or SIGTERM, SIGHUP) ends the waits: the motion is stopped and every
-      // window that arrived is kept.
+      // window that arrived is kept. So does the emergency stop (after its StopAll).
       const std::atomic<bool>& interrupted = StopOnSignals();
       board.SetInterrupt(&interrupted);
+      estop = StartEstop(estop_options, iface, "mjc trial", board.session(), &StopFlag());
+      // Each window start an edge, set the moment its frame is handled.
+      if (sync) {
+        board.OnWindowStart([&](const protocol::WindowStart& w) {
+          std::string why;
+          if (sync->OnWindowStart(w, &why) || !sync_error.empty()) return;
+          sync_error = why;
+          EndProgress();
+          std::fprintf(stderr, "mjc trial: %s (the trial goes on)\n", why.c_str());
+        });
+      }
       // Who it is (one board, its build) and the calibration it runs on, in run.json
       // before anything moves.
       IdentifyOrThrow(board);
@@ -157,6 +210,10 @@ void AddTrial(CLI::App& app) {
                        plan.size());
           std::string line;
           const bool answered = static_cast<bool>(std::getline(std::cin, line));
+          if (stopped_by_estop()) {
+            throw estop_end(EstopWhat(*estop) + " during the pause before trial " +
+                            std::to_string(t + 1) + "; earlier trials are in " + saved);
+          }
           if (interrupted || !answered) {
             throw end(Exit::kStopped,
                       std::string(interrupted ? "interrupted"
@@ -186,9 +243,11 @@ void AddTrial(CLI::App& app) {
         EndProgress();
         if (!trial.completed) {
           // The motor first: a file can wait, a finger should not. Two boards answering
-          // for the node may both be moving: both are told.
-          const bool stop = trial.end == host::TrialEnd::kInterrupted ||
-                            trial.end == host::TrialEnd::kAmbiguous;
+          // for the node may both be moving: both are told. An emergency stop has told
+          // every board already.
+          const bool stop =
+              !stopped_by_estop() && (trial.end == host::TrialEnd::kInterrupted ||
+                                      trial.end == host::TrialEnd::kAmbiguous);
           const std::string stopped = stop ? StopMotion(board) : "";
           // What arrived is kept, the interrupted trial's windows included.
           if (!trial.windows.empty()) {
@@ -198,6 +257,9 @@ void AddTrial(CLI::App& app) {
           std::size_t windows = 0;
           for (const host::TrialWindows& r : runs) windows += r.windows.size();
           const std::string kept = std::to_string(windows) + " windows saved to " + saved;
+          if (stopped_by_estop()) {
+            throw estop_end(ConfirmEmergencyStop(board, *estop) + "; " + kept);
+          }
           if (trial.end == host::TrialEnd::kInterrupted) {
             throw end(Exit::kStopped, "interrupted: " + stopped + "; " + kept);
           }
@@ -235,15 +297,30 @@ void AddTrial(CLI::App& app) {
         host::WriteWindowsCsv(runs, dir);
       }
     } catch (const Failure& f) {
+      // Stopped before the first trial moved (the button pressed at the start, or while
+      // the board was asked who it is).
+      if (record.end.outcome == "running" && stopped_by_estop()) {
+        throw estop_end(EstopWhat(*estop) + "; " + f.what());
+      }
       if (record.end.outcome == "running") throw end(f.exit(), f.what());
       throw;
     } catch (const std::exception& e) {
       throw end(Exit::kFailure, e.what());
     }
+    estop.reset();  // the motion is over
     record.end.outcome = "completed";
     host::WriteRunRecord(record, dir);
     std::fputs(host::TrialTables(runs, repeatability).c_str(), stdout);
     std::printf("windows: %s\nrun: %s\n", saved.c_str(), (dir / "run.json").c_str());
+    if (sync) {
+      std::printf("sync: %s: %llu window starts, %llu edges\n", sync_line->name().c_str(),
+                  static_cast<unsigned long long>(sync->windows()),
+                  static_cast<unsigned long long>(sync->edges()));
+      if (!sync_error.empty()) {
+        throw Failure("sync line: " + sync_error +
+                      " (the trials ran; their windows are saved)");
+      }
+    }
     std::string why;
     if (!figure) return;
     if (!host::PlotTrials(dir, repeatability, host::RunTitle(record), &why)) {

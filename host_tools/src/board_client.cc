@@ -346,6 +346,11 @@ void BoardClient::Handle(const CanFrame& f) {
       if (ok(Decode(f, &e))) status_.energy_J = e.energy.ToDouble();
       return;
     }
+    case Function::kWindowStart: {
+      WindowStart w;
+      if (ok(Decode(f, &w)) && on_window_start_) on_window_start_(w);
+      return;
+    }
     // A window travels as five frames (see AcceptWindowPart).
     case Function::kWindowHeader: {
       WindowHeader h;

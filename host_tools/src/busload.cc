@@ -49,6 +49,7 @@ BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards,
   add(TelemetryControl{}, r.control_hz);
   add(Heartbeat{}, r.heartbeat_hz);
   add(BoardInfo{}, r.info_hz);
+  add(WindowStart{}, kWindowsHz);
   add(WindowHeader{}, kWindowsHz);
   add(WindowEnergy{}, kWindowsHz);
   add(WindowWork{}, kWindowsHz);

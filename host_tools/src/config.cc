@@ -60,6 +60,51 @@ std::optional<ToolConfig> ParseToolConfig(std::string_view text, std::string_vie
     }
     config.node = static_cast<int>(n.get<std::int64_t>());
   }
+  // A line: CHIP:LINE, checked for its form (the chip and line are found when used).
+  const auto line = [&](const nlohmann::json& v,
+                        const std::string& key) -> std::optional<gpio::LineSpec> {
+    std::string form;
+    if (!v.is_string()) {
+      *why = where + ": '" + key + "' must be a GPIO line as a string, CHIP:LINE (e.g. " +
+             "\"gpiochip0:17\"), not " + v.dump();
+      return std::nullopt;
+    }
+    auto spec = gpio::ParseLineSpec(v.get<std::string>(), &form);
+    if (!spec) *why = where + ": '" + key + "': " + form;
+    return spec;
+  };
+  for (const char* key : {"estop_line", "sync_line"}) {
+    if (!j.contains(key)) continue;
+    auto spec = line(j[key], key);
+    if (!spec) return std::nullopt;
+    (std::string_view(key) == "estop_line" ? config.estop_line : config.sync_line) =
+        *spec;
+  }
+  if (j.contains("estop_active")) {
+    const auto& a = j["estop_active"];
+    if (a != "high" && a != "low") {
+      *why = where + ": 'estop_active' must be \"high\" or \"low\", not " + a.dump();
+      return std::nullopt;
+    }
+    config.estop_active_low = a == "low";
+  }
+  if (j.contains("reset_lines")) {
+    const auto& r = j["reset_lines"];
+    if (!r.is_object()) {
+      *why = where + ": 'reset_lines' must be an object from node ids to GPIO lines " +
+             "(e.g. {\"1\": \"gpiochip0:20\"})";
+      return std::nullopt;
+    }
+    for (const auto& [node, value] : r.items()) {
+      if (node.size() != 1 || node[0] < '1' || node[0] > '8') {
+        *why = where + ": 'reset_lines': '" + node + "' is not a node id 1..8";
+        return std::nullopt;
+      }
+      auto spec = line(value, "reset_lines." + node);
+      if (!spec) return std::nullopt;
+      config.reset_lines[node[0] - '0'] = *spec;
+    }
+  }
   return config;
 }
 

@@ -37,14 +37,23 @@ std::string SignalLine(const S& s, const std::string& receiver) {
          ",0) [" + Num(lo) + "|" + Num(hi) + "] \"" + s.unit + "\" " + receiver + "\n";
 }
 
+// A message to or from `node` as "<Name>_J<node>"; a broadcast message (to every node,
+// from the host) once, as "<Name>", when `node` is kEveryNode.
 template <class M>
 void AddMessage(std::string& out, std::uint8_t node) {
+  if (Message<M>::kBroadcast != (node == kEveryNode)) return;
   const bool from_board = Message<M>::kSender == Sender::kBoard;
+  std::string everyone;
+  for (std::uint8_t n = kMinNode; n <= kMaxNode; ++n) {
+    everyone += (n == kMinNode ? "" : ",") + NodeName(n);
+  }
   const std::string sender = from_board ? NodeName(node) : "Host";
-  const std::string receiver = from_board ? "Host" : NodeName(node);
-  out += "BO_ " + std::to_string(IdOf<M>(node)) + " " + Message<M>::kName + "_J" +
-         std::to_string(node) + ": " + std::to_string(Message<M>::kLength) + " " +
-         sender + "\n";
+  const std::string receiver = from_board               ? "Host"
+                               : Message<M>::kBroadcast ? everyone
+                                                        : NodeName(node);
+  out += "BO_ " + std::to_string(IdOf<M>(node)) + " " + Message<M>::kName +
+         (Message<M>::kBroadcast ? "" : "_J" + std::to_string(node)) + ": " +
+         std::to_string(Message<M>::kLength) + " " + sender + "\n";
   std::apply([&](const auto&... s) { ((out += SignalLine(s, receiver)), ...); },
              Message<M>::kSignals);
   out += "\n";
@@ -69,6 +78,8 @@ std::string GenerateDbc() {
   std::string out = "VERSION \"maestro-jc protocol 1\"\n\nNS_ :\n\nBS_:\n\nBU_: Host";
   for (std::uint8_t n = kMinNode; n <= kMaxNode; ++n) out += " " + NodeName(n);
   out += "\n\n";
+  std::apply([&](auto... m) { (AddMessage<decltype(m)>(out, kEveryNode), ...); },
+             AllMessages{});
   for (std::uint8_t n = kMinNode; n <= kMaxNode; ++n) {
     std::apply([&](auto... m) { (AddMessage<decltype(m)>(out, n), ...); }, AllMessages{});
   }

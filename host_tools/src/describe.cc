@@ -38,6 +38,8 @@ std::string_view FaultName(Fault fault) {
       return "board start-up failed";
     case Fault::kCanBusOff:
       return "CAN bus-off";
+    case Fault::kEmergencyStop:
+      return "emergency stop";
   }
   return "unknown fault";
 }

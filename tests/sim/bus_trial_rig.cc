@@ -38,9 +38,10 @@ protocol::CanFrame Flood::Next() {
       f.length = 8;
       break;
     default: {  // anything for another node: a random identifier, length, payload
+      // (not 0x000: the emergency stop is every node's)
       do {
         f.id = static_cast<std::uint32_t>(rng_()) & 0x7FFu;
-      } while (NodeOf(f.id) == node_);
+      } while (NodeOf(f.id) == node_ || f.id == IdOf<StopAll>(kEveryNode));
       f.length = static_cast<std::uint8_t>(rng_() % 9);
       for (auto& b : f.data) b = static_cast<std::uint8_t>(rng_());
       break;

@@ -148,5 +148,11 @@ TEST(FaultStop, HostHeartbeatLostStopsWithinItsTimeout) {
 TEST(FaultStop, BusOffStopsInTheNextTick) {
   EXPECT_LE(MeasureAndCheck(FaultCase::kCanBusOff, 303, Persists::kNo).stop_ticks(), 1);
 }
+// The broadcast stop: the main loop takes the frame, the next tick latches the fault
+// and writes the bridge off.
+TEST(FaultStop, EmergencyStopStopsInTheNextTick) {
+  EXPECT_EQ(MeasureAndCheck(FaultCase::kEmergencyStop, 305, Persists::kNo).stop_ticks(),
+            1);
+}
 
 }  // namespace

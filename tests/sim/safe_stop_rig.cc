@@ -400,6 +400,8 @@ class Rig {
     bus_.down = true;
     bus_up_tick_ = now() + kBusOffRecoveryTicks;
   }
+  // An emergency stop to every node (mjc estop), received before the next tick.
+  void StopAll() { Send(protocol::StopAll{protocol::kStopAllKey, kSession}); }
   std::uint32_t last_heartbeat_rx() const { return last_heartbeat_rx_; }
   std::uint32_t last_setpoint_rx() const { return last_setpoint_rx_; }
   const std::vector<protocol::FaultEvent>& fault_events() const { return fault_events_; }
@@ -570,6 +572,8 @@ const char* Name(FaultCase c) {
       return "host_heartbeat_lost";
     case FaultCase::kCanBusOff:
       return "can_bus_off";
+    case FaultCase::kEmergencyStop:
+      return "emergency_stop";
   }
   return "?";
 }
@@ -602,6 +606,8 @@ Fault ExpectedFault(FaultCase c) {
       return Fault::kHostHeartbeatLost;
     case FaultCase::kCanBusOff:
       return Fault::kCanBusOff;
+    case FaultCase::kEmergencyStop:
+      return Fault::kEmergencyStop;
   }
   return Fault::kNone;
 }
@@ -670,16 +676,21 @@ Measurement Measure(FaultCase c) {
       case FaultCase::kCanBusOff:
         rig.BusOff();
         break;
+      case FaultCase::kEmergencyStop:
+        rig.StopAll();
+        break;
       default:
         break;
     }
     have_cause = true;
     // A sample fault is carried by the next tick's sample; a lost message counts from
-    // the tick it was last received at, bus-off from the tick of the call.
+    // the tick it was last received at, bus-off from the tick of the call, a StopAll
+    // from the tick after which it was received.
     m.cause_tick = c == FaultCase::kCommandTimeout      ? rig.last_setpoint_rx()
                    : c == FaultCase::kHostHeartbeatLost ? rig.last_heartbeat_rx()
-                   : c == FaultCase::kCanBusOff         ? rig.now()
-                                                        : rig.next_tick();
+                   : c == FaultCase::kCanBusOff || c == FaultCase::kEmergencyStop
+                       ? rig.now()
+                       : rig.next_tick();
     if (!IsStuck(c)) {
       m.detectable_tick = m.cause_tick;
       have_detectable = true;

@@ -56,6 +56,9 @@
 //                                    board tick of that call. For the recovery (128 × 11
 //                                    recessive bits at 1 Mbit/s, 15 ticks) nothing is
 //                                    delivered either way.
+//   emergency_stop                   the host broadcasts a StopAll (node 0: mjc estop);
+//                                    from the board tick after which the main loop
+//                                    received it
 //
 // After the stop each case checks, through the bus: the FaultEvent decodes with the
 // stable code and the stop tick; the bridge stays off on every tick until an accepted
@@ -66,7 +69,9 @@
 // (Plant::ClearFaults), and a ClearFaults with the reference showing the cause gone
 // returns the board to idle.
 //
-// No refused clear is tried for lost messages and bus-off (events: nothing is left to
+// No refused clear is tried for lost messages, bus-off and the emergency stop (events:
+// the board cannot see a button still pressed; mjc estop sends the stop again while it
+// is; nothing is left to
 // clear) nor for a frozen encoder: the supervisor's Clear() re-runs only the checks
 // that need no history, so it accepts a clear while an encoder is still frozen (a
 // frozen count is only implausible under motion; the fault returns once motion makes
@@ -96,16 +101,17 @@ enum class FaultCase : std::uint8_t {
   kCommandTimeout,
   kHostHeartbeatLost,
   kCanBusOff,
+  kEmergencyStop,
 };
 
-inline constexpr std::array<FaultCase, 13> kAllCases = {
+inline constexpr std::array<FaultCase, 14> kAllCases = {
     FaultCase::kJointParity,     FaultCase::kJointErrorFlag,
     FaultCase::kJointJump,       FaultCase::kJointStuck,
     FaultCase::kMotorStuck,      FaultCase::kJointAngleLimit,
     FaultCase::kMotorAngleLimit, FaultCase::kTorqueLimit,
     FaultCase::kVelocityLimit,   FaultCase::kTickOverrun,
     FaultCase::kCommandTimeout,  FaultCase::kHostHeartbeatLost,
-    FaultCase::kCanBusOff,
+    FaultCase::kCanBusOff,       FaultCase::kEmergencyStop,
 };
 
 // snake_case, as in the figure names (safe_stop_ticks_<name>).

@@ -68,10 +68,6 @@ CanNodeCounters CanNode::counters() const {
 void CanNode::Push(const CanFrame& frame) { (void)tx_.Push(frame); }  // drops counted
 
 void CanNode::HandleFrame(const CanFrame& frame) {
-  if (frame.id > 0x7FFu || protocol::NodeOf(frame.id) != config_.node) {
-    ++counters_.ignored;
-    return;
-  }
   const auto count = [this](DecodeError e) {
     if (e == DecodeError::kOk) {
       ++counters_.handled;
@@ -80,6 +76,24 @@ void CanNode::HandleFrame(const CanFrame& frame) {
     ++counters_.malformed[static_cast<std::size_t>(e)];
     return false;
   };
+  // Every node's, ahead of the node filter: the emergency stop.
+  if (frame.id == protocol::IdOf<protocol::StopAll>(protocol::kEveryNode)) {
+    protocol::StopAll s;
+    DecodeError e = Decode(frame, &s);
+    // Another protocol's frame on identifier 0 (a wrong key) is no stop.
+    if (e == DecodeError::kOk && s.key != protocol::kStopAllKey) {
+      e = DecodeError::kFieldOutOfRange;
+    }
+    if (!count(e)) return;
+    // The next tick latches it and disables the bridge (the path of every fault).
+    app_->RaiseFault(Fault::kEmergencyStop);
+    ++counters_.emergency_stops;
+    return;
+  }
+  if (frame.id > 0x7FFu || protocol::NodeOf(frame.id) != config_.node) {
+    ++counters_.ignored;
+    return;
+  }
   switch (static_cast<Function>(protocol::FunctionOf(frame.id))) {
     case Function::kCommand: {
       protocol::Command c;
@@ -120,6 +134,11 @@ void CanNode::HandleFrame(const CanFrame& frame) {
       }
       protocol::BootHold h;
       if (count(Decode(frame, &h))) HandleBootHold(h);
+      return;
+    }
+    case Function::kStopAll: {  // addressed to one node: no broadcast, refused
+      protocol::StopAll s;
+      (void)count(Decode(frame, &s));
       return;
     }
     case Function::kHostHeartbeat: {
@@ -294,6 +313,7 @@ void CanNode::Poll() {
   clock_.Advance(last.telemetry.tick, tick_hz());
   AppEvent e;
   while (app_->PopEvent(&e)) SendEvent(e);
+  AnnounceWindow(last);
   PollUpload();
   Supervise(last);
   SendTelemetry(last);

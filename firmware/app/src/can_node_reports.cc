@@ -1,6 +1,6 @@
 // What the board reports: the app's events (command verdicts, faults, state changes,
-// window summaries) as frames, and telemetry, its heartbeat and its BoardInfo at their
-// cadences.
+// window summaries) as frames, the start of each window, and telemetry, its heartbeat
+// and its BoardInfo at their cadences.
 #include "mjc/app/can_node.h"
 
 namespace mjc::app {
@@ -45,6 +45,19 @@ void CanNode::SendEvent(const AppEvent& e) {
       return Send(t);
     }
   }
+}
+
+void CanNode::AnnounceWindow(const JointApp::Snapshot& last) {
+  const Segment segment = last.telemetry.segment;
+  if (segment != last_segment_ &&
+      (segment == Segment::kFlexionLoading || segment == Segment::kExtensionLoading)) {
+    protocol::WindowStart w;
+    w.motion =
+        segment == Segment::kFlexionLoading ? Motion::kFlexion : Motion::kExtension;
+    w.start_tick = last.telemetry.tick;
+    Send(w);
+  }
+  last_segment_ = segment;
 }
 
 void CanNode::SendTelemetry(const JointApp::Snapshot& last) {

@@ -53,6 +53,11 @@ struct Board {
           Decode(f, &r) == DecodeError::kOk && results_n < 16) {
         results[results_n++] = r;
       }
+      // Window starts and ends in the order sent, decoded.
+      WindowStart w;
+      if (Decode(f, &w) == DecodeError::kOk && starts_n < 16) starts[starts_n++] = w;
+      WindowTicks t;
+      if (Decode(f, &t) == DecodeError::kOk && ends_n < 16) ends[ends_n++] = t;
     }
   }
   JointApp app;
@@ -62,6 +67,10 @@ struct Board {
   CanFrame last[128] = {};
   protocol::CommandResult results[16] = {};  // every reply, in order
   int results_n = 0;
+  WindowStart starts[16] = {};
+  int starts_n = 0;
+  WindowTicks ends[16] = {};
+  int ends_n = 0;
 };
 
 template <class M>
@@ -107,6 +116,17 @@ MJC_VECTOR_TEST(CanNode, TrialStartedOverCanWithReplyTelemetryAndWindows) {
   VT_EXPECT_EQ(Sent<WindowHeader>(b), 4u);
   VT_EXPECT_EQ(Sent<WindowEnergy>(b), 4u);
   VT_EXPECT_EQ(Sent<WindowTicks>(b), 4u);
+  // Each announced at its start, on the tick its summary names as its start: flexion,
+  // extension, flexion, extension. The trajectory's quarter period at 10 Hz is 250
+  // ticks, so the windows start 500 ticks apart.
+  VT_EXPECT_EQ(b.starts_n, 4);
+  VT_EXPECT_EQ(b.ends_n, 4);
+  for (int i = 0; i < 4 && i < b.starts_n && i < b.ends_n; ++i) {
+    VT_EXPECT_TRUE(b.starts[i].motion ==
+                   (i % 2 == 0 ? Motion::kFlexion : Motion::kExtension));
+    VT_EXPECT_EQ(b.starts[i].start_tick, b.ends[i].start_tick);
+    if (i > 0) VT_EXPECT_EQ(b.starts[i].start_tick - b.starts[i - 1].start_tick, 500u);
+  }
   VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
   VT_EXPECT_EQ(b.node.counters().tx_dropped, 0u);
 }
@@ -403,6 +423,51 @@ MJC_VECTOR_TEST(CanNode, BusOffStopsTheMotorInTheNextTickAndIsCounted) {
   b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 2}, 1));
   b.Run(2);
   VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
+}
+
+MJC_VECTOR_TEST(CanNode, StopAllStopsEveryNodeInTheNextTickUntilCleared) {
+  static Board b;  // node 1
+  Calibrate(b);
+  StartLongTrial(b, 1);
+  b.Run(1000);
+  VT_EXPECT_TRUE(b.io.written.bridge_enabled);
+  // Another protocol's frame on identifier 0 (a wrong key) and the stop's function
+  // code addressed to one node are no stop: counted as malformed, the trial goes on.
+  StopAll wrong;
+  wrong.key = 0x00000001;
+  b.node.HandleFrame(Encode(wrong, 0));
+  CanFrame addressed = Encode(StopAll{}, 0);
+  addressed.id = MakeId(static_cast<std::uint8_t>(Function::kStopAll), 1);
+  b.node.HandleFrame(addressed);
+  b.Run(1);
+  VT_EXPECT_TRUE(b.io.written.bridge_enabled);
+  VT_EXPECT_EQ(
+      b.node.counters().malformed[static_cast<int>(DecodeError::kFieldOutOfRange)], 1u);
+  VT_EXPECT_EQ(b.node.counters().malformed[static_cast<int>(DecodeError::kBadNode)], 1u);
+  // The broadcast: taken although it names no node, bridge off in the next tick.
+  const CanFrame stop = Encode(StopAll{kStopAllKey, 0x5A5A}, 0);
+  VT_EXPECT_EQ(stop.id, 0u);
+  b.node.HandleFrame(stop);
+  b.Run(1);
+  VT_EXPECT_TRUE(!b.io.written.bridge_enabled);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kFault);
+  VT_EXPECT_TRUE(Last<FaultEvent>(vt_context, b).fault == Fault::kEmergencyStop);
+  VT_EXPECT_EQ(b.node.counters().emergency_stops, 1u);
+  // Latched: no trial starts until a clear.
+  b.Run(1000);
+  StartLongTrial(b, 2);
+  b.Run(10);
+  VT_EXPECT_TRUE(!b.io.written.bridge_enabled);
+  VT_EXPECT_TRUE(Last<protocol::CommandResult>(vt_context, b).outcome !=
+                 CommandOutcomeCode::kAccepted);
+  b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 3}, 1));
+  b.Run(2);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
+  // An idle board is stopped all the same: a trial is refused after it.
+  b.node.HandleFrame(stop);
+  b.Run(2);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kFault);
+  VT_EXPECT_EQ(b.node.counters().emergency_stops, 2u);
 }
 
 MJC_VECTOR_TEST(CanNode, TellsWhoItIsAtStartAndTenTimesASecond) {

@@ -24,8 +24,9 @@ TEST(Describe, EveryFaultTheProtocolCarriesHasItsOwnName) {
     EXPECT_NE(host::FaultName(fault), "unknown fault") << code;
     EXPECT_TRUE(names.insert(host::FaultName(fault)).second) << "shared name: " << code;
   }
-  EXPECT_GE(valid, 14);
+  EXPECT_GE(valid, 15);
   EXPECT_EQ(host::DescribeFault(Fault::kCanBusOff), "303 (CAN bus-off)");
+  EXPECT_EQ(host::DescribeFault(Fault::kEmergencyStop), "305 (emergency stop)");
   EXPECT_EQ(host::DescribeFault(static_cast<Fault>(999)), "999 (unknown fault)");
 }
 

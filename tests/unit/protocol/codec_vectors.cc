@@ -74,8 +74,10 @@ int RoundTripFailures(vt::Rng& rng, int samples) {
     const auto node = static_cast<std::uint8_t>(1 + rng.Next() % 8u);
     const CanFrame frame = Encode(sent, node);
     M got{};
+    // A broadcast message names no node.
+    const std::uint8_t to = Message<M>::kBroadcast ? kEveryNode : node;
     if (Decode(frame, &got) != DecodeError::kOk || !FieldsEqual(sent, got) ||
-        NodeOf(frame.id) != node || frame.length != Message<M>::kLength) {
+        NodeOf(frame.id) != to || frame.length != Message<M>::kLength) {
       ++failures;
     }
   }
@@ -144,6 +146,36 @@ MJC_VECTOR_TEST(ProtocolCodec, MalformedFramesAreRefusedAndChangeNothing) {
   VT_EXPECT_EQ(out.tick, 99u);
   VT_EXPECT_TRUE(Decode(frame, &out) == DecodeError::kOk);
   VT_EXPECT_EQ(out.tick, 1234u);
+}
+
+// The emergency stop on the bus: identifier 0x000 (the highest priority there is), six
+// bytes whose first four spell "STOP" in ASCII, then the session, little-endian.
+MJC_VECTOR_TEST(ProtocolCodec, StopAllIsIdentifierZeroToEveryNode) {
+  StopAll m;
+  m.session = 0xBEEF;
+  const CanFrame f = Encode(m, 5);  // the node is not the broadcast's to choose
+  VT_EXPECT_EQ(f.id, 0x000u);
+  VT_EXPECT_EQ(f.length, 6);
+  VT_EXPECT_EQ(f.data[0], 'S');
+  VT_EXPECT_EQ(f.data[1], 'T');
+  VT_EXPECT_EQ(f.data[2], 'O');
+  VT_EXPECT_EQ(f.data[3], 'P');
+  VT_EXPECT_EQ(f.data[4], 0xEF);
+  VT_EXPECT_EQ(f.data[5], 0xBE);
+  StopAll out;
+  out.session = 1;
+  VT_EXPECT_TRUE(Decode(f, &out) == DecodeError::kOk);
+  VT_EXPECT_EQ(out.session, 0xBEEF);
+  VT_EXPECT_EQ(out.key, kStopAllKey);
+  // The function code with a node id is no broadcast, and refused.
+  CanFrame addressed = f;
+  addressed.id = MakeId(static_cast<std::uint8_t>(Function::kStopAll), 3);
+  out.session = 1;
+  VT_EXPECT_TRUE(Decode(addressed, &out) == DecodeError::kBadNode);
+  VT_EXPECT_EQ(out.session, 1);
+  // Hosts send it; a board sends its WindowStart (a sign of its life).
+  VT_EXPECT_TRUE(SentByBoard(static_cast<std::uint8_t>(Function::kWindowStart)));
+  VT_EXPECT_TRUE(!SentByBoard(static_cast<std::uint8_t>(Function::kStopAll)));
 }
 
 MJC_VECTOR_TEST(ProtocolCodec, RandomFramesNeverCrashAndDecodeConsistently) {

@@ -70,7 +70,8 @@ void AddFrames(vt::Rng& rng, std::ofstream& frames, std::vector<Expected>& expec
     }
     frames << '\n';
     Expected e;
-    e.name = std::string(Message<M>::kName) + "_J" + std::to_string(node);
+    e.name = std::string(Message<M>::kName) +
+             (Message<M>::kBroadcast ? "" : "_J" + std::to_string(node));
     std::apply(
         [&](const auto&... s) {
           ((e.signals.emplace_back(s.name,

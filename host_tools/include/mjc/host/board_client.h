@@ -239,6 +239,12 @@ class BoardClient {
   // saying the controller went bus-off. Frames are lost until it recovers, and a board
   // whose own controller went bus-off stops its motion (kCanBusOff).
   std::uint64_t bus_off() const { return bus_off_seen_ - bus_off_at_start_; }
+  // Called by the waits as soon as a WindowStart from the node arrives (the board
+  // began a window; mjc trial --sync-line marks it on a GPIO line).
+  void OnWindowStart(std::function<void(const protocol::WindowStart&)> handler) {
+    on_window_start_ = std::move(handler);
+  }
+
   // Called by the waits (Poll, Command, ReadParam) as soon as they see a new bus-off
   // report, with bus_off() so far: what lets a tool say so at once.
   void OnBusOff(std::function<void(std::uint64_t total)> handler) {
@@ -283,6 +289,7 @@ class BoardClient {
   std::uint64_t bus_off_at_start_ = 0;
   std::uint64_t bus_off_seen_ = 0;
   std::function<void(std::uint64_t)> on_bus_off_;
+  std::function<void(const protocol::WindowStart&)> on_window_start_;
   BoardIdentity identity_;
 };
 

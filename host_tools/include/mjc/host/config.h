@@ -3,23 +3,34 @@
 // MJC_IFACE, which wins over the file.
 #pragma once
 
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
+
+#include "mjc/gpio/line_spec.h"
 
 namespace mjc::host {
 
 struct ToolConfig {
   std::optional<std::string> iface;  // a CAN interface's name
   std::optional<int> node;           // 1..8
-  std::string source;                // where it came from, for messages ("" = nowhere)
+  // The lab's GPIO lines (README: GPIO lines), each CHIP:LINE.
+  std::optional<gpio::LineSpec> estop_line;   // the emergency-stop button
+  std::optional<bool> estop_active_low;       // its active level ("estop_active")
+  std::optional<gpio::LineSpec> sync_line;    // the trigger to other instruments
+  std::map<int, gpio::LineSpec> reset_lines;  // each board's NRST, by node id
+  std::string source;  // where it came from, for messages ("" = nowhere)
 };
 
 // The keys of the config file; more will come (lines of a hand, the lab's robots).
-inline constexpr std::string_view kConfigKeys[] = {"iface", "node"};
+inline constexpr std::string_view kConfigKeys[] = {
+    "iface", "node", "estop_line", "estop_active", "sync_line", "reset_lines"};
 
 // The config file's text: a JSON object with optional "iface" (an interface name, 1 to
-// 15 characters of [A-Za-z0-9_.-], as Linux allows) and "node" (an integer 1..8).
+// 15 characters of [A-Za-z0-9_.-], as Linux allows), "node" (an integer 1..8),
+// "estop_line" and "sync_line" (CHIP:LINE, gpio::ParseLineSpec), "estop_active"
+// ("high" or "low") and "reset_lines" (an object from node ids "1".."8" to CHIP:LINE).
 // nullopt with *why naming `source` and the key when it is not JSON, holds an unknown
 // key (named with the nearest known one) or a value out of range.
 std::optional<ToolConfig> ParseToolConfig(std::string_view text, std::string_view source,

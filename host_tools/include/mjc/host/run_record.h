@@ -20,14 +20,15 @@ namespace mjc::host {
 // belongs to a tool that died (SIGKILL, power loss) before it could say more.
 struct RunEnd {
   std::string outcome = "running";  // completed, interrupted, stopped, faulted,
-                                    // no_answer, refused, ambiguous, failed, running
+                                    // no_answer, refused, ambiguous, failed, running,
+                                    // emergency_stop (mjc estop's StopAll, a button)
   std::optional<int> fault_code;    // with "faulted": the board's fault code
   std::string message;              // why, in the tool's words ("" when completed)
 };
 
 inline constexpr std::string_view kRunOutcomes[] = {
     "completed", "interrupted", "stopped", "faulted", "no_answer",
-    "refused",   "ambiguous",   "failed",  "running"};
+    "refused",   "ambiguous",   "failed",  "running", "emergency_stop"};
 
 struct RunRecord {
   std::string command;  // "trial" or "calibrate"

@@ -61,6 +61,7 @@ struct CanNodeCounters {
   std::uint32_t host_timeouts = 0;
   std::uint32_t bus_off = 0;  // bus-off events the driver reported (each one stops us)
   std::uint32_t boot_holds_refused = 0;  // BootHolds answered kMotionRunning
+  std::uint32_t emergency_stops = 0;     // StopAll frames taken (each one stops us)
   std::uint32_t isotp_errors = 0;  // transfers dropped (sequence, timeout, overflow)
   std::uint32_t calibrations_accepted = 0;
   std::uint32_t calibrations_refused = 0;
@@ -78,7 +79,8 @@ class CanNode {
   // `store` (may be null: nothing persists) keeps every applied calibration.
   CanNode(JointApp* app, const CanNodeConfig& config, CalibrationStore* store = nullptr);
 
-  // A frame from the bus.
+  // A frame from the bus: this node's, or a broadcast StopAll (every node's: the next
+  // tick latches Fault::kEmergencyStop and disables the bridge).
   void HandleFrame(const protocol::CanFrame& frame);
 
   // Once per control tick (after it), in the main loop: command verdicts and other
@@ -141,6 +143,8 @@ class CanNode {
   void ReplyCalibration(protocol::CalibrationResult result, std::uint8_t detail);
   // Reports: app events and telemetry as frames (can_node_reports.cc).
   void SendEvent(const AppEvent& e);
+  // A WindowStart when the last tick's setpoint entered a loading segment.
+  void AnnounceWindow(const JointApp::Snapshot& last);
   void SendTelemetry(const JointApp::Snapshot& last);
 
   JointApp* app_;
@@ -162,6 +166,9 @@ class CanNode {
   protocol::IsoTpReceiver isotp_;
   CalibrationStore* store_;
   Cadence angles_, torque_, power_, energy_, control_, heartbeat_, info_;
+  // The setpoint's segment at the last poll: a change into a loading segment is a
+  // window's start (AnnounceWindow).
+  Segment last_segment_ = Segment::kIdle;
   // Streaming: the tick of the last setpoint (or of the stream's start).
   std::uint32_t last_setpoint_tick_ = 0;
   // Host supervision. A start command awaiting the tick's verdict, and its session;

@@ -32,12 +32,15 @@ enum class Fault : std::uint16_t {
   kCanBusOff = 303,          // the CAN controller went bus-off: the host cannot stop us
   kBoardStartup = 304,       // the board did not come up whole (clock, encoder, CAN):
                              // held for the whole run, never cleared
+  kEmergencyStop = 305,      // a host's StopAll (an emergency-stop button): every board
+                             // stops, and stays stopped until a clear
 };
 
 // The faults the main loop raises (it sees the bus; the tick does not).
 constexpr bool IsExternalFault(Fault f) {
   return f == Fault::kCommandTimeout || f == Fault::kHostHeartbeatLost ||
-         f == Fault::kCanBusOff || f == Fault::kBoardStartup;
+         f == Fault::kCanBusOff || f == Fault::kBoardStartup ||
+         f == Fault::kEmergencyStop;
 }
 
 struct SupervisorConfig {

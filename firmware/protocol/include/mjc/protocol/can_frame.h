@@ -15,9 +15,11 @@ struct CanFrame {
   std::array<std::uint8_t, 64> data{};
 };
 
-// Node ids of the Maestro's joints. 0 is no node (never sent).
+// Node ids of the Maestro's joints. 0 addresses every node: only the broadcast
+// messages (messages.h: StopAll) carry it.
 inline constexpr std::uint8_t kMinNode = 1;
 inline constexpr std::uint8_t kMaxNode = 8;
+inline constexpr std::uint8_t kEveryNode = 0;
 
 // 11-bit identifiers: function code (7 bits) above the node id (4 bits). Lower
 // identifiers win arbitration, so the function codes are ordered by urgency.

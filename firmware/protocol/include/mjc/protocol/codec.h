@@ -18,7 +18,7 @@ namespace mjc::protocol {
 enum class DecodeError : std::uint8_t {
   kOk = 0,
   kWrongFunction = 1,    // the identifier is not this message's
-  kBadNode = 2,          // node id outside 1..8
+  kBadNode = 2,          // node id outside 1..8 (a broadcast message's: not 0)
   kWrongLength = 3,      // DLC differs from the message's length
   kFieldOutOfRange = 4,  // a field's raw value is not legal for its type
   kFdFrame = 5,          // an FD frame where a classic one is defined
@@ -56,12 +56,15 @@ constexpr bool LayoutIsValid() {
 
 }  // namespace codec_detail
 
+// A broadcast message's identifier names no node (kEveryNode), whatever `node` says.
 template <class M>
 constexpr std::uint32_t IdOf(std::uint8_t node) {
-  return MakeId(static_cast<std::uint8_t>(Message<M>::kFunction), node);
+  return MakeId(static_cast<std::uint8_t>(Message<M>::kFunction),
+                Message<M>::kBroadcast ? kEveryNode : node);
 }
 
-// The frame of `message` from (board) or to (host) `node`.
+// The frame of `message` from (board) or to (host) `node`; a broadcast message goes to
+// every node (node ignored).
 template <class M>
 constexpr CanFrame Encode(const M& message, std::uint8_t node) {
   static_assert(codec_detail::LayoutIsValid<M>(), "signals overlap or leave the frame");
@@ -84,7 +87,10 @@ constexpr DecodeError Decode(const CanFrame& frame, M* out) {
     return DecodeError::kWrongFunction;
   }
   const std::uint8_t node = NodeOf(frame.id);
-  if (node < kMinNode || node > kMaxNode) return DecodeError::kBadNode;
+  if (Message<M>::kBroadcast ? node != kEveryNode
+                             : (node < kMinNode || node > kMaxNode)) {
+    return DecodeError::kBadNode;
+  }
   if (frame.fd) return DecodeError::kFdFrame;
   if (frame.length != Message<M>::kLength) return DecodeError::kWrongLength;
   const std::uint64_t word = GetLe(frame.data.data(), Message<M>::kLength);

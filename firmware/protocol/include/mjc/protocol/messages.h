@@ -42,6 +42,7 @@ constexpr bool ValidEnumValue(Fault f) {
     case Fault::kHostHeartbeatLost:
     case Fault::kCanBusOff:
     case Fault::kBoardStartup:
+    case Fault::kEmergencyStop:
       return true;
   }
   return false;
@@ -58,12 +59,16 @@ namespace mjc::protocol {
 // Function codes, 7 bits, ordered by urgency (lower wins arbitration). Stable: never
 // renumber.
 enum class Function : std::uint8_t {
+  // To every node at once (node 0): identifier 0x000, which wins arbitration against
+  // every other frame on the bus.
+  kStopAll = 0x00,
   kFault = 0x01,
   kCommand = 0x02,
   kSetpoint = 0x03,
   kCommandResult = 0x04,
   kTrialConfig = 0x05,
   kSweepConfig = 0x06,
+  kWindowStart = 0x07,
   kWindowHeader = 0x08,
   kWindowEnergy = 0x09,
   kWindowWork = 0x0A,
@@ -175,6 +180,16 @@ struct SweepConfig {
   std::uint8_t repetitions = 10;
   std::uint8_t rest_100ms = 5;
 };
+// A window (the loading and unloading half of a flexion or an extension) begins: sent
+// by the main loop's first pass after the tick whose setpoint enters the window's
+// loading segment, so a host can mark the moment on other instruments (mjc trial
+// --sync-line). start_tick is the WindowTicks.start_tick of the summary that follows
+// at the window's end (the tracker's start, aligned by the velocity estimator's delay,
+// lands on the same tick), unless the main loop missed ticks.
+struct WindowStart {
+  Motion motion = Motion::kFlexion;
+  std::uint32_t start_tick = 0;
+};
 struct WindowHeader {
   Motion motion = Motion::kFlexion;
   std::uint16_t repetition = 0;
@@ -256,6 +271,18 @@ struct BoardInfo {
 };
 struct HostHeartbeat {
   std::uint8_t sequence = 0;
+  SessionId session = 0;
+};
+// "Every board, stop now": an emergency stop (mjc estop, a button on a GPIO line),
+// broadcast to node 0 on the bus's highest-priority identifier. Each board latches
+// Fault::kEmergencyStop in its next tick, which disables its bridge, whatever it was
+// doing; only a ClearFaults releases it. No board answers (eight answers would only
+// delay each other); the Fault frame each sends is the confirmation. The key guards
+// against another protocol's frame on identifier 0 (CANopen's NMT is 0x000 with two
+// bytes); `session` names the sender, 0 = none.
+inline constexpr std::uint32_t kStopAllKey = 0x504F5453u;  // "STOP"
+struct StopAll {
+  std::uint32_t key = kStopAllKey;
   SessionId session = 0;
 };
 
@@ -357,16 +384,21 @@ struct BootResult {
 template <class M>
 struct Message;
 
-#define MJC_MESSAGE(Type, function, length, sender, ...)           \
-  template <>                                                      \
-  struct Message<Type> {                                           \
-    using T = Type;                                                \
-    static constexpr Function kFunction = Function::function;      \
-    static constexpr const char* kName = #Type;                    \
-    static constexpr std::uint8_t kLength = length;                \
-    static constexpr Sender kSender = Sender::sender;              \
-    static constexpr auto kSignals = std::make_tuple(__VA_ARGS__); \
+// kBroadcast: sent to node 0, which every node takes (the identifier carries no node);
+// otherwise to or from one node 1..8.
+#define MJC_MESSAGE_TO(Type, function, length, sender, broadcast, ...) \
+  template <>                                                          \
+  struct Message<Type> {                                               \
+    using T = Type;                                                    \
+    static constexpr Function kFunction = Function::function;          \
+    static constexpr const char* kName = #Type;                        \
+    static constexpr std::uint8_t kLength = length;                    \
+    static constexpr Sender kSender = Sender::sender;                  \
+    static constexpr bool kBroadcast = broadcast;                      \
+    static constexpr auto kSignals = std::make_tuple(__VA_ARGS__);     \
   }
+#define MJC_MESSAGE(Type, function, length, sender, ...) \
+  MJC_MESSAGE_TO(Type, function, length, sender, false, __VA_ARGS__)
 
 MJC_MESSAGE(FaultEvent, kFault, 7, kBoard, MakeSignal("fault_code", &T::fault, 0, 16),
             MakeSignal("tick", &T::tick, 16, 32, "tick"),
@@ -392,6 +424,8 @@ MJC_MESSAGE(SweepConfig, kSweepConfig, 8, kHost,
             MakeSignal("frequency_mHz", &T::frequency_mHz, 32, 16, "mHz"),
             MakeSignal("repetitions", &T::repetitions, 48, 8),
             MakeSignal("rest_100ms", &T::rest_100ms, 56, 8, "100 ms"));
+MJC_MESSAGE(WindowStart, kWindowStart, 5, kBoard, MakeSignal("motion", &T::motion, 0, 8),
+            MakeSignal("start_tick", &T::start_tick, 8, 32, "tick"));
 MJC_MESSAGE(WindowHeader, kWindowHeader, 8, kBoard,
             MakeSignal("motion", &T::motion, 0, 8),
             MakeSignal("repetition", &T::repetition, 8, 16),
@@ -444,6 +478,8 @@ MJC_MESSAGE(BoardInfo, kBoardInfo, 8, kBoard, MakeSignal("build", &T::build, 0, 
 MJC_MESSAGE(HostHeartbeat, kHostHeartbeat, 3, kHost,
             MakeSignal("sequence", &T::sequence, 0, 8),
             MakeSignal("session", &T::session, 8, 16));
+MJC_MESSAGE_TO(StopAll, kStopAll, 6, kHost, true, MakeSignal("key", &T::key, 0, 32),
+               MakeSignal("session", &T::session, 32, 16));
 MJC_MESSAGE(BootStatus, kBootStatus, 8, kBoard, MakeSignal("state", &T::state, 0, 4),
             MakeSignal("reason", &T::reason, 4, 4), MakeSignal("error", &T::error, 8, 8),
             MakeSignal("progress_permille", &T::progress_permille, 16, 16, "1/1000"),
@@ -457,14 +493,16 @@ MJC_MESSAGE(BootResult, kBootResult, 8, kBoard, MakeSignal("request", &T::reques
             MakeSignal("next_offset", &T::next_offset, 32, 32, "B"));
 
 #undef MJC_MESSAGE
+#undef MJC_MESSAGE_TO
 
 // Every message, for iteration (the DBC, bus load, decoding any frame).
 using AllMessages =
-    std::tuple<FaultEvent, Command, Setpoint, CommandResult, TrialConfig, SweepConfig,
-               WindowHeader, WindowEnergy, WindowWork, WindowPeaks, WindowTicks,
-               ParamWrite, ParamRead, ParamValue, TelemetryAngles, TelemetryTorque,
-               TelemetryPower, TelemetryEnergy, TelemetryControl, Heartbeat, BoardInfo,
-               HostHeartbeat, BootStatus, BootHold, BootCommand, BootResult>;
+    std::tuple<StopAll, FaultEvent, Command, Setpoint, CommandResult, TrialConfig,
+               SweepConfig, WindowStart, WindowHeader, WindowEnergy, WindowWork,
+               WindowPeaks, WindowTicks, ParamWrite, ParamRead, ParamValue,
+               TelemetryAngles, TelemetryTorque, TelemetryPower, TelemetryEnergy,
+               TelemetryControl, Heartbeat, BoardInfo, HostHeartbeat, BootStatus,
+               BootHold, BootCommand, BootResult>;
 
 namespace detail {
 template <class... M>
