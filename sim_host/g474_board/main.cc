@@ -119,7 +119,8 @@ int main(int argc, char** argv) {
   int node = 1;
   double seconds = 0, speed = 1;
   mjc::cli::AddIfaceOption(&app, &iface);
-  mjc::cli::AddNodeOption(&app, &node);
+  mjc::cli::AddNodeOption(
+      &app, &node, "Node id, when the flash holds no identity record (a record's wins)");
   app.add_option("--robot", robot, "Plant parameter set of the robot (name or .json)")
       ->capture_default_str();
   app.add_option("--subject", subject,

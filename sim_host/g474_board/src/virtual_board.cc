@@ -86,9 +86,8 @@ Picoseconds BusTime(const g474model::CanBusFrame& f, double nominal, double data
 
 VirtualBoard::VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link)
     : config_(config), link_(link) {
-  // The FLASH model takes a file of exactly its array's size and writes the whole array
-  // back at every erase and program: any other file is refused here, before the model
-  // could overwrite it.
+  // The FLASH model keeps a file of exactly its array's size (and leaves any other
+  // alone): a file it cannot keep is refused here, rather than a board that forgets.
   if (!config_.flash_path.empty() && std::filesystem::exists(config_.flash_path)) {
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(config_.flash_path, error);
@@ -106,6 +105,9 @@ VirtualBoard::VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link
   chip.flash.path = config_.flash_path;
   std::copy(config_.unique_id.begin(), config_.unique_id.end(), chip.flash.uid);
   chip_ = std::make_unique<g474model::VirtualChip>(chip);
+  if (!config_.flash_path.empty() && !chip_->flash().mirrored()) {
+    throw std::runtime_error(config_.flash_path + ": cannot open it for writing");
+  }
   plant_ = std::make_unique<plant::Plant>(config_.plant);
   last_motor_count_ = plant_->MotorCount();
 
