@@ -116,7 +116,9 @@ void AddCal(CLI::App& app) {
   upload->add_option("file", file, "Calibration JSON")->required();
   AddIfaceOption(upload, &iface);
   AddNodeOption(upload, &node);
-  upload->add_option("--timeout-ms", timeout_ms, "Wait this long for the board's answer")
+  upload
+      ->add_option("--timeout-ms", timeout_ms,
+                   "Wait this long of the board's own time for its answer")
       ->check(InRange(10, 60000, "ms"))
       ->capture_default_str();
   upload->callback([] {
@@ -135,8 +137,7 @@ void AddCal(CLI::App& app) {
       case host::UploadStatus::kLinkFailed:
         throw Failure("cannot send to " + who + " on " + iface + ": " + why);
       case host::UploadStatus::kNoAnswer:
-        throw Failure(Exit::kNoAnswer, who + " did not answer the upload within " +
-                                           std::to_string(timeout_ms) + " ms");
+        throw Failure(Exit::kNoAnswer, who + " did not answer the upload (" + why + ")");
       case host::UploadStatus::kMalformedReply:
         throw Failure(Exit::kNoAnswer, "malformed answer: " + why);
       case host::UploadStatus::kAnswered:

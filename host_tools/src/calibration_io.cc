@@ -141,6 +141,14 @@ UploadOutcome UploadCalibration(const std::string& iface, int node,
   using protocol::Function;
   const auto n = static_cast<std::uint8_t>(node);
   UploadOutcome out;
+  // The board's clock, from its heartbeats on a raw socket opened before the record
+  // goes out.
+  auto raw = SocketCanLink::Open(iface, why);
+  if (!raw) {
+    out.status = UploadStatus::kLinkFailed;
+    return out;
+  }
+  BoardClient board(raw.get(), n);
   auto link = IsoTpLink::Open(
       iface, protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpToBoard), n),
       protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), n), why);
@@ -149,12 +157,23 @@ UploadOutcome UploadCalibration(const std::string& iface, int node,
     out.status = UploadStatus::kLinkFailed;
     return out;
   }
-  const auto reply = link->Receive(timeout_ms, why);
+  std::optional<std::vector<std::uint8_t>> reply;
+  bool failed = false;
+  std::string isotp_why;
+  const auto over = [&] {
+    if (!reply && !failed) reply = link->Receive(0, &isotp_why, &failed);
+    return reply.has_value() || failed;
+  };
+  WaitEnd end{};
+  const bool ended =
+      board.Await(over, Patience{std::chrono::milliseconds(timeout_ms)}, &end, why);
   out.elapsed_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
           .count();
   if (!reply) {
-    out.status = UploadStatus::kNoAnswer;
+    if (failed) *why = isotp_why;
+    out.status = ended || end != WaitEnd::kLinkFailed ? UploadStatus::kNoAnswer
+                                                      : UploadStatus::kLinkFailed;
     return out;
   }
   if (reply->size() != 2) {

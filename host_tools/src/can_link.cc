@@ -336,9 +336,12 @@ bool IsoTpLink::Send(std::span<const std::uint8_t> payload, std::string* why) {
 }
 
 std::optional<std::vector<std::uint8_t>> IsoTpLink::Receive(int timeout_ms,
-                                                            std::string* why) {
+                                                            std::string* why,
+                                                            bool* failed) {
   bool error = false;
+  if (failed != nullptr) *failed = true;
   if (!WaitFor(fd_, POLLIN, timeout_ms, &error)) {
+    if (failed != nullptr) *failed = error;
     Say(why, error ? Errno("ISO-TP poll on '" + interface_ + "'")
                    : "no ISO-TP reply on '" + interface_ + "' within " +
                          std::to_string(timeout_ms) + " ms");
@@ -354,6 +357,7 @@ std::optional<std::vector<std::uint8_t>> IsoTpLink::Receive(int timeout_ms,
     return std::nullopt;
   }
   buffer.resize(static_cast<std::size_t>(n));
+  if (failed != nullptr) *failed = false;
   return buffer;
 }
 

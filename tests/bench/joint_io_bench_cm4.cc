@@ -11,6 +11,7 @@
 // there. joint_io_write therefore includes that wait.
 #include <cstdint>
 
+#include "g474_ram_blocks.h"
 #include "hal/stm32g4/joint_io.h"
 #include "semihost.h"
 
@@ -23,17 +24,9 @@ namespace {
 
 using namespace mjc;
 using namespace mjc::stm32g4;
+using bench::kRamBlocks;
+using bench::Reg;
 
-// 3 MB into the 4 MB RAM: far above this image's data and below its stack.
-constexpr Address kRegs = 0x20300000u;
-constexpr JointIoBlocks kRamBlocks{
-    .bridge_timer = kRegs + 0x0000,
-    .encoder_timer = kRegs + 0x0400,
-    .joint_spi = kRegs + 0x0800,
-    .joint_cs = {kRegs + 0x0C00, 4},
-    .bridge_enable = {kRegs + 0x1000, 10},
-    .cycle_counter = kRegs + 0x1400,
-};
 using Io = Stm32g4JointIo<kRamBlocks>;
 
 Io g_io;
@@ -41,10 +34,6 @@ volatile std::uint16_t g_count = 0;
 volatile std::uint16_t g_frame = 0;
 Actuation g_run;
 Actuation g_stop;
-
-volatile std::uint32_t& Reg(Address a) {
-  return *reinterpret_cast<volatile std::uint32_t*>(a);
-}
 
 void Baseline() { g_count = 0; }
 // The interrupt's entry and the sample: TIM1's flag, the cycle count, TIM3's count, the

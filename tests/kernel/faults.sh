@@ -4,29 +4,31 @@
 #
 # CAN bus-off: a CAN driver tells of bus-off with an error frame (CAN_ERR_BUSOFF); on
 # vcan0 cansend injects one, and every raw socket with an error mask receives it: the
-# simulated board's (`mjc sim` stands its link for the board's controller) and the
-# tools'. During a trial:
+# simulated board's (`mjc sim` stands its link for the board's controller; the virtual
+# G474 board turns it into its FDCAN's own bus-off) and the tools'. During a trial:
 #   - the board stops the motion, sends its Fault frame (0x011 for node 1) with code
 #     303 (0x012F), counts the bus-off, and keeps talking (it recovered);
 #   - mjc trial says bus-off on stderr at once, and ends with exit 5 naming fault 303;
 #   - mjc monitor, running meanwhile, says bus-off too;
 #   - mjc clear clears the fault (its cause is gone) and the next trial completes.
-# A cause that stays: the joint encoder flags an error (mjc sim's SIGUSR1); mjc clear is
-# refused (exit 4, naming fault 101) until the flag is gone, then accepted.
-# usage: faults.sh <path of mjc>
+# A cause that stays: the joint encoder flags an error (the board's SIGUSR1); mjc clear
+# is refused (exit 4, naming fault 101) until the flag is gone, then accepted.
+# The board is `mjc sim`, or the one MJC_BOARD names (board.sh).
+# usage: [MJC_BOARD=<board command>] faults.sh <path of mjc>
 set -u
 mjc=$1
 work=$(mktemp -d)
 . "$(dirname "$0")/checks.sh"
 . "$(dirname "$0")/receivers.sh"
+. "$(dirname "$0")/board.sh"
 
 # The plant's own slack (sim_host/params/default.json), so no sweep is needed.
 cat >"$work/cal.json" <<'JSON'
 {"c_right_deg": 1.1001, "c_left_deg": -0.8995, "alpha": 1.0, "sea_stiffness_Nm_per_rad": 0.63, "joint_zero_count": 0}
 JSON
-"$mjc" sim --iface vcan0 --node 1 --subject subject1 --speed 1 2>"$work/sim.err" &
+"${board[@]}" --iface vcan0 --node 1 --subject subject1 --speed 1 2>"$work/sim.err" &
 sim=$!
-check "the simulated board comes up" wait_for "$work/sim.err" "mjc sim: node 1 on vcan0"
+check "the simulated board comes up" wait_board "$work/sim.err" 1
 check "calibration upload" "$mjc" cal upload "$work/cal.json" --iface vcan0 --node 1
 
 count_receivers
@@ -48,7 +50,7 @@ status=$?
 check "mjc trial ends with exit 5, the board faulted (exit $status)" test "$status" -eq 5
 check "mjc trial says bus-off at once" grep -q "mjc trial: vcan0: the CAN controller reported bus-off (1 since start)" "$work/trial.err"
 check "mjc trial names fault 303" grep -q "fault 303 (CAN bus-off)" "$work/trial.err"
-check "the board says bus-off" wait_for "$work/sim.err" "mjc sim: vcan0: bus-off at"
+check "the board says bus-off" wait_for "$work/sim.err" "$board_name: vcan0: bus-off at"
 check "the board's Fault frame carries 303 (0x012F)" wait_for "$work/fault.log" "vcan0 011#2F01"
 check "mjc monitor says bus-off at once" wait_for "$work/monitor.err" "mjc monitor: vcan0: the CAN controller reported bus-off"
 check "mjc monitor shows the latched fault" wait_for "$work/monitor.out" "  fault 303 (CAN bus-off)"
@@ -74,7 +76,7 @@ status=$?
 check "mjc clear of an absent node exits 3 (exit $status)" test "$status" -eq 3
 check "and says why" grep -q "mjc clear: node 2 is silent (is the board powered and on vcan0? try mjc list)" "$work/silent.err"
 
-# A cause that stays: the joint encoder flags an error (mjc sim's SIGUSR1) at rest.
+# A cause that stays: the joint encoder flags an error (the board's SIGUSR1) at rest.
 kill -USR1 "$sim"
 check "the board says the encoder flags an error" wait_for "$work/sim.err" "joint encoder error flag raised"
 "$mjc" monitor --iface vcan0 --node 1 --interval-ms 200 >"$work/ef.out" 2>&1 &

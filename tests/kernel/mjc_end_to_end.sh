@@ -1,10 +1,10 @@
 #!/bin/bash
 # mjc end to end on Debian's CAN stack (run inside the VM by scripts/kernel-vm): a
-# simulated board (`mjc sim`) on vcan0, `mjc log` recording, `mjc calibrate` running the
-# sweep, the fit and the ISO-TP upload over the bus; can-utils reading our log and
-# talking to the board; refusals with reasons, one line each, and their exit statuses
-# (host_tools/mjc/commands.h: Exit).
-# usage: mjc_end_to_end.sh <path of mjc>
+# simulated board (`mjc sim`, or the board MJC_BOARD names: board.sh) on vcan0, `mjc log`
+# recording, `mjc calibrate` running the sweep, the fit and the ISO-TP upload over the
+# bus; can-utils reading our log and talking to the board; refusals with reasons, one
+# line each, and their exit statuses (host_tools/mjc/commands.h: Exit).
+# usage: [MJC_BOARD=<board command>] mjc_end_to_end.sh <path of mjc>
 set -u
 mjc=$1
 work=$(mktemp -d)
@@ -15,11 +15,8 @@ plant=$here/../../sim_host/params/default.json
 # Readiness: a listener started in the background is ready once the CAN core has
 # registered its receiver on vcan0.
 . "$(dirname "$0")/receivers.sh"
-# A simulated board is on the bus once it prints "mjc sim: node N on vcan0" (after its
-# first pass of the main loop has sent its BoardInfo and heartbeat).
-wait_sim() {  # ERRFILE NODE
-  wait_for "$1" "mjc sim: node $2 on vcan0"
-}
+# The board under test and wait_board (board.sh).
+. "$(dirname "$0")/board.sh"
 # One line on stderr and exit status STATUS: the refusal contract.
 refuses() {  # STATUS ERRFILE COMMAND...: COMMAND exits STATUS with one stderr line
   local want=$1 err=$2 got
@@ -39,10 +36,11 @@ json_number() {  # FILE KEY
 # The boards keep real time (--speed 1): every wait of the tools and of this script
 # follows the boards' own progress, so a machine too slow to keep it only takes longer.
 # Node 1, the robot alone, for the calibration; then node 2, a subject's hand donned,
-# for the rest (one board at a time: a simulated board takes a fifth of a vCPU).
-"$mjc" sim --iface vcan0 --node 1 2>"$work/sim.err" &
+# for the rest (one board at a time: mjc sim takes a fifth of a vCPU, the virtual board
+# more).
+"${board[@]}" --iface vcan0 --node 1 2>"$work/sim.err" &
 sim=$!
-check "board 1 comes up" wait_sim "$work/sim.err" 1
+check "board 1 comes up" wait_board "$work/sim.err" 1
 # can-utils' own recording (one receiver), for mjc log --from to read; then mjc log
 # (two: data and error frames), each counted once the ones before are in.
 count_receivers
@@ -93,9 +91,9 @@ kill "$sim"
 wait "$sim"
 check "board 1 accounted for every frame (no malformed)" grep -q 'malformed 0' "$work/sim.err"
 
-"$mjc" sim --iface vcan0 --node 2 --subject subject1 2>"$work/sim2.err" &
+"${board[@]}" --iface vcan0 --node 2 --subject subject1 2>"$work/sim2.err" &
 sim2=$!
-check "board 2 comes up" wait_sim "$work/sim2.err" 2
+check "board 2 comes up" wait_board "$work/sim2.err" 2
 check "mjc cal upload calibrates node 2 with node 1's file" \
   "$mjc" cal upload "$work/cal/calibration.json" --iface vcan0 --node 2
 check "mjc cal download reads node 2's calibration back" \
@@ -176,18 +174,18 @@ check "an unwritable calibration download is refused, exit 1" \
 check "a missing interface is reported, exit 1" \
   refuses 1 "$work/noif.err" "$mjc" log --iface nosuch0 --seconds 1
 check "  naming it" grep -q nosuch0 "$work/noif.err"
-check "a bad flag is reported, exit 2" sh -c "'$mjc' sim --node 9 2>/dev/null; test \$? -eq 2"
+check "a bad flag is reported, exit 2" refuses 2 "$work/flag.err" "${board[@]}" --node 9
 
 # A board with flash keeps its calibration over a restart.
-"$mjc" sim --iface vcan0 --node 3 --flash "$work/node3.flash" 2>"$work/sim3a.err" &
+"${board[@]}" --iface vcan0 --node 3 --flash "$work/node3.flash" 2>"$work/sim3a.err" &
 sim3=$!
-wait_sim "$work/sim3a.err" 3
+wait_board "$work/sim3a.err" 3
 check "node 3 stores an uploaded calibration" "$mjc" cal upload "$work/cal/calibration.json" --iface vcan0 --node 3
 kill "$sim3"
 wait "$sim3" 2>/dev/null
-"$mjc" sim --iface vcan0 --node 3 --flash "$work/node3.flash" 2>"$work/sim3b.err" &
+"${board[@]}" --iface vcan0 --node 3 --flash "$work/node3.flash" 2>"$work/sim3b.err" &
 sim3=$!
-wait_sim "$work/sim3b.err" 3
+wait_board "$work/sim3b.err" 3
 check "restarted node 3 restores it from flash" grep -q 'restored calibration #1' "$work/sim3b.err"
 check "and reports it calibrated" \
   sh -c "'$mjc' cal download --iface vcan0 --node 3 >'$work/back3.json' && grep -q c_right_deg '$work/back3.json'"

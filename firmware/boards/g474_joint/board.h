@@ -2,6 +2,14 @@
 // bound to this board's pins and memory map, behind the interfaces the application
 // uses (hal::JointIo for the tick, hal::CanPort, hal::Flash).
 //
+// Two entries run this code. The image (startup.cc and main.cc, chip only: the vector
+// table, Reset_Handler's stack switch, the memory initialisation) and the virtual board
+// (sim_host/g474_board: the same sources built for x86 against the register models of
+// sim_host/g474) both call
+//   BringUp();  // the start-up report (did the last run crash?) and the clock tree
+//   Run();      // pins, watchdog, drivers, JointBoard, the tick, the main loop
+// with the interrupt entries of interrupts.h as the handlers of their IRQs.
+//
 // Interrupts (vector table in startup.cc, priorities in hal/stm32g4/nvic.h):
 //   TIM1_UP_TIM16 (IRQ 25, priority 0): the 10 kHz control tick
 //   FDCAN1_IT0    (IRQ 21, priority 4): received frames → the CAN port's queue
@@ -11,12 +19,15 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 
 #include "hal/stm32g4/clock.h"
 #include "hal/stm32g4/fdcan.h"
 #include "hal/stm32g4/flash.h"
 #include "hal/stm32g4/joint_io.h"
 #include "hal/stm32g4/watchdog.h"
+#include "mjc/app/joint_board.h"
+#include "mjc/boot/handoff.h"
 #include "mjc/protocol/can_frame.h"
 #include "mjc/protocol/messages.h"
 #include "pins.h"
@@ -50,7 +61,7 @@ constexpr std::array<stm32g4::CanFilter, 9> NodeFilters(std::uint8_t node) {
   return filters;
 }
 
-// What the start-up code leaves for main(): the clock bring-up's result (a failed one
+// What the start-up code leaves for Run(): the clock bring-up's result (a failed one
 // leaves the chip on HSI16: the board must not run the motor) and, when the last reset
 // came from a fault handler, which exception it was.
 struct StartupReport {
@@ -60,6 +71,62 @@ struct StartupReport {
       0;  // its exception number (IPSR): 2 NMI, 3 HardFault, ..
 };
 const StartupReport& Startup();
+
+// Survives a reset (.noinit: neither copied nor zeroed); valid when `magic` matches.
+// DefaultHandler (startup.cc) writes it; BringUp() reads it into the report.
+struct CrashRecord {
+  std::uint32_t magic;
+  std::uint32_t exception;
+};
+inline constexpr std::uint32_t kCrashMagic = 0x43524153u;  // "CRAS"
+extern CrashRecord g_crash;
+
+// After the memory is initialised: takes the crash record into Startup()'s report,
+// then brings the clock tree up to 170 MHz (its result is in the report too).
+void BringUp();
+
+// What the image runs with its defaults; the virtual board passes its command line's.
+struct RunOptions {
+  // The node id when the identity pages hold no record (an identity record's wins, as
+  // on the chip).
+  std::uint8_t node = kNodeId;
+  // The host supervision timeout (CanNodeConfig::host_timeout_ms); none: the node's
+  // default. A board simulated faster than real time scales it with its speed.
+  std::optional<std::uint16_t> host_timeout_ms;
+};
+
+// The board, from the pins to the main loop; never returns. Every RAM object the
+// board's code keeps (the drivers, the board, the tick count) is rebuilt here first:
+// on the chip the start-up code has just zeroed their memory and this writes the same
+// values again; the host build enters Run() again after a reset of its virtual chip,
+// where nothing zeroes them (nothing here relies on a static's first use either).
+[[noreturn]] void Run(const RunOptions& options = {});
+
+// The calibration pages' first byte on the chip's bus (2 × 2 KB, the linker script's
+// CAL region): from the linker's symbol on the chip, from the same script's map on
+// the host.
+std::uint32_t CalibrationAddress();
+
+// The 32 bytes the bootloader and this image tell each other across a reset (the
+// linker script's HANDOFF region on the chip, 0x2001_3FE0; memory no reset of the
+// virtual chip touches on the host). Run() confirms a healthy start there
+// (boot::ConfirmHealthyBoot) once its tick and main loop have run 2 s.
+volatile boot::BootHandoff& Handoff();
+
+// The ticks (at 10 kHz) the tick and the main loop must run, the watchdog refreshed,
+// before Run() confirms a healthy start: until then a reset counts as a failed start, and
+// after three the bootloader stays (firmware/bootloader/BOOTLOADER.md).
+inline constexpr std::uint32_t kHealthyBootTicks = 20'000;
+
+// What a debugger would read in the board's RAM: the board once Run() has built it
+// (nullptr before), and what its boot found in flash. The virtual board reads them
+// between interrupts (its summary, the tests); nothing on the chip calls them.
+const app::JointBoard* Instance();
+struct BootFacts {
+  bool calibration_restored = false;
+  std::uint32_t calibration_sequence = 0;
+};
+const BootFacts& LastBoot();
 
 // Any context: bridge enable low and TIM1's outputs to their idle level (low sides on).
 inline void StopBridge() { JointIo::EmergencyStop(); }

@@ -1,12 +1,14 @@
-// Reset and exception entry of the joint board (STM32G474).
+// Reset and exception entry of the joint board (STM32G474): the chip-only part of its
+// start-up (the vector table, the stack switch, the memory initialisation, the fault
+// handler); the rest is shared with the virtual board (board.h).
 //
 // Reset_Handler: thread mode moves to the process stack (the main stack in SRAM) while
 // exceptions keep the main stack pointer (the interrupt stack in CCM SRAM, loaded from
 // vector 0), then StartUp(): the FPU first (CPACR, ARMv7-M B3.2.20: before any
 // floating-point instruction, and nothing before it uses one), .data and .ccm_data
 // copied, .bss and .ccm_bss zeroed, VTOR at this image's vector table (a bootloader
-// below it may have left its own), static constructors, the clock tree (170 MHz), then
-// main().
+// below it may have left its own), static constructors, BringUp() (the crash record
+// into the start-up report, the clock tree to 170 MHz), then main().
 //
 // Every exception and interrupt without a driver goes to DefaultHandler: the bridge's
 // enable line low and TIM1's main output off (its idle state: both low sides on, so the
@@ -25,6 +27,7 @@
 #include "hal/stm32g4/regs/cortex_m4.h"
 #include "hal/stm32g4/regs/irq.h"
 #include "hal/stm32g4/vector_table.h"
+#include "interrupts.h"
 
 extern "C" {
 // Linker script symbols (linker/stm32g474.ld).
@@ -35,6 +38,10 @@ extern std::uint32_t __ccm_bss_start[], __ccm_bss_end[];
 extern std::uint32_t __interrupt_stack_top[];
 extern std::uint32_t __main_stack_top[];
 extern const std::uint32_t __vector_table[];
+// The calibration pages' place in flash.
+extern const std::uint8_t __calibration_start[];
+// Shared with the bootloader across resets (the HANDOFF region).
+extern mjc::boot::BootHandoff __boot_handoff;
 
 void __libc_init_array();
 void _init() {}
@@ -52,24 +59,10 @@ int main();
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void StartUp();
 [[noreturn]] void DefaultHandler();
-// The drivers' interrupt entries (main.cc).
-void TickInterrupt();
-void CanLine0Interrupt();
-void CanLine1Interrupt();
 }
 
 namespace mjc::board {
 namespace {
-
-// Survives a reset (.noinit: neither copied nor zeroed); valid when `magic` matches.
-struct CrashRecord {
-  std::uint32_t magic;
-  std::uint32_t exception;
-};
-constexpr std::uint32_t kCrashMagic = 0x43524153u;  // "CRAS"
-__attribute__((section(".noinit.crash"))) CrashRecord g_crash;
-
-StartupReport g_report;
 
 std::size_t Bytes(const std::uint32_t* begin, const std::uint32_t* end) {
   return static_cast<std::size_t>(reinterpret_cast<std::uintptr_t>(end) -
@@ -78,7 +71,12 @@ std::size_t Bytes(const std::uint32_t* begin, const std::uint32_t* end) {
 
 }  // namespace
 
-const StartupReport& Startup() { return g_report; }
+std::uint32_t CalibrationAddress() {
+  return static_cast<std::uint32_t>(
+      reinterpret_cast<std::uintptr_t>(__calibration_start));
+}
+
+volatile boot::BootHandoff& Handoff() { return __boot_handoff; }
 
 }  // namespace mjc::board
 
@@ -132,14 +130,8 @@ void StartUp() {
   mjc::stm32g4::DataSyncBarrier();
   mjc::stm32g4::InstructionSyncBarrier();
 
-  using mjc::board::g_crash;
-  using mjc::board::g_report;
-  g_report.crashed = g_crash.magic == mjc::board::kCrashMagic;
-  g_report.crash_exception = g_report.crashed ? g_crash.exception : 0;
-  g_crash.magic = 0;
-
   __libc_init_array();
-  g_report.clock = mjc::stm32g4::ConfigureClocks();
+  mjc::board::BringUp();
   (void)main();
   DefaultHandler();  // main never returns; if it did, stop as for a fault
 }
@@ -156,7 +148,7 @@ void DefaultHandler() {
   }
 }
 
-using Handler = void (*)();
+using mjc::board::Handler;
 
 struct VectorTable {
   const void* initial_stack_pointer;
@@ -164,12 +156,6 @@ struct VectorTable {
 };
 
 namespace {
-
-constexpr std::array<mjc::stm32g4::IrqHandler<Handler>, 3> kDriverIrqs{{
-    {mjc::stm32g4::irq::kTim1Update, TickInterrupt},
-    {mjc::stm32g4::irq::kFdcan1Line0, CanLine0Interrupt},
-    {mjc::stm32g4::irq::kFdcan1Line1, CanLine1Interrupt},
-}};
 
 constexpr mjc::stm32g4::SystemHandlers<Handler> kSystem{
     .reset = Reset_Handler,
@@ -191,4 +177,4 @@ extern "C" __attribute__((section(".isr_vector"),
                           used)) constinit const VectorTable kVectorTable = {
     __interrupt_stack_top,
     mjc::stm32g4::BuildVectorTable(kSystem, Handler{&DefaultHandler}, Handler{nullptr},
-                                   kDriverIrqs)};
+                                   mjc::board::kDriverIrqs)};

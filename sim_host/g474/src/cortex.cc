@@ -5,7 +5,7 @@
 namespace mjc::g474model {
 namespace {
 // Offsets from 0xE0000000 (ARMv7-M ARM B3.2.2, B3.4.3, C1.8.7, C1.6.5).
-constexpr std::uint32_t kDwtCtrl = 0x1000, kDwtCyccnt = 0x1004;
+constexpr std::uint32_t kDwtCtrl = 0x1000;
 constexpr std::uint32_t kIser = 0xE100, kIcer = 0xE180, kIspr = 0xE200, kIcpr = 0xE280,
                         kIabr = 0xE300, kIpr = 0xE400, kStir = 0xEF00;
 constexpr std::uint32_t kCpuid = 0xED00, kIcsr = 0xED04, kVtor = 0xED08, kAircr = 0xED0C,

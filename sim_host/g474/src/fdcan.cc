@@ -91,6 +91,7 @@ bool Fdcan::active() const {
 bool Fdcan::line0() const {
   if (!(ile_ & 1u)) return false;
   const std::uint32_t on = ir_ & ie_;
+  if (on == 0) return false;
   for (int b = 0; b < 24; ++b) {
     if ((on >> b) & 1u && !((ils_ >> kGroupOf[b]) & 1u)) return true;
   }
@@ -99,6 +100,7 @@ bool Fdcan::line0() const {
 bool Fdcan::line1() const {
   if (!(ile_ & 2u)) return false;
   const std::uint32_t on = ir_ & ie_;
+  if (on == 0) return false;
   for (int b = 0; b < 24; ++b) {
     if ((on >> b) & 1u && ((ils_ >> kGroupOf[b]) & 1u)) return true;
   }

@@ -1,5 +1,8 @@
 #include "mjc/g474model/flash.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -25,21 +28,34 @@ std::string Hex(std::uint32_t v) {
 Flash::Flash(ViolationLog* log, FlashConfig config)
     : log_(log), config_(std::move(config)), memory_(kSize, 0xFF) {
   if (!config_.path.empty()) {
+    bool keep = true, fresh = true;
     std::ifstream in(config_.path, std::ios::binary);
     if (in) {
       std::vector<std::uint8_t> data((std::istreambuf_iterator<char>(in)),
                                      std::istreambuf_iterator<char>());
-      if (data.size() == memory_.size()) memory_ = std::move(data);
+      fresh = false;
+      keep = data.size() == memory_.size();
+      if (keep) memory_ = std::move(data);
     }
+    if (keep) file_ = ::open(config_.path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fresh) Save(0, kSize);
   }
   Reset();
 }
 
-void Flash::Save() const {
-  if (config_.path.empty()) return;
-  std::ofstream out(config_.path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(memory_.data()),
-            static_cast<std::streamsize>(memory_.size()));
+Flash::~Flash() {
+  if (file_ >= 0) ::close(file_);
+}
+
+void Flash::Save(std::uint32_t offset, std::uint32_t bytes) const {
+  if (file_ < 0) return;
+  const std::uint8_t* p = &memory_[offset];
+  auto at = static_cast<off_t>(offset);
+  while (bytes > 0) {
+    const ssize_t n = ::pwrite(file_, p, bytes, at);
+    if (n <= 0) return;  // a full disk: the array in memory stays right
+    p += n, at += n, bytes -= static_cast<std::uint32_t>(n);
+  }
 }
 
 void Flash::Reset() {
@@ -99,9 +115,9 @@ void Flash::Complete() {
   } else if (op_.kind == OpKind::kProgram) {
     std::memcpy(p, &op_.value, 8);  // little-endian, as the Cortex-M4 stores it
   }
+  Save(op_.offset, op_.length);
   op_ = Operation{};
   if (cr_ & (1u << 24)) sr_ |= kEop;  // EOP only when EOPIE is set
-  Save();
 }
 
 void Flash::Interrupt() {
@@ -116,8 +132,8 @@ void Flash::Interrupt() {
     const std::uint64_t mixed = (op_.value & mask) | (old & ~mask);
     std::memcpy(p, &mixed, 8);
   }
+  Save(op_.offset, op_.length);
   op_ = Operation{};
-  Save();
 }
 
 bool Flash::PowerLost() {

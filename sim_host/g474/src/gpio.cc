@@ -86,6 +86,7 @@ void GpioPort::Reset() {
   ospeedr_ = port_ == 0 ? 0x0C000000u : port_ == 1 ? 0x000000C0u : 0;
   pupdr_ = port_ == 0 ? 0x64000000u : port_ == 1 ? 0x00000100u : 0;
   otyper_ = odr_ = lckr_ = afrl_ = afrh_ = 0;
+  NoteRouting();
   Refresh();
 }
 
@@ -117,8 +118,9 @@ std::optional<bool> GpioPort::Level(int pin) const {
   return std::nullopt;
 }
 
-void GpioPort::Refresh() {
+void GpioPort::Refresh(std::uint32_t pins) {
   for (int pin = 0; pin < 16; ++pin) {
+    if (((pins >> pin) & 1u) == 0) continue;
     const bool level = Level(pin).value_or(false);
     if (level != last_level_[static_cast<std::size_t>(pin)]) {
       last_level_[static_cast<std::size_t>(pin)] = level;
@@ -133,7 +135,7 @@ void GpioPort::Refresh() {
 
 void GpioPort::DriveInput(int pin, std::optional<bool> level) {
   external_[static_cast<std::size_t>(pin)] = level;
-  Refresh();
+  Refresh(1u << pin);  // an external driver moves its own pin only
 }
 
 bool GpioPort::Read(const Access& a, std::uint32_t* v) {
@@ -182,9 +184,14 @@ bool GpioPort::Read(const Access& a, std::uint32_t* v) {
 }
 
 bool GpioPort::Write(const Access& a) {
+  // ODR, BSRR and BRR move only the pins whose output bit changes; every other
+  // register may change any pin's level.
+  const std::uint32_t odr_before = odr_;
+  const bool output_only = a.offset == 0x14 || a.offset == 0x18 || a.offset == 0x28;
   switch (a.offset) {
     case 0x00:
       a.Apply(&moder_);
+      NoteRouting();
       break;
     case 0x04:
       a.Apply(&otyper_, 0xFFFFu);
@@ -211,9 +218,11 @@ bool GpioPort::Write(const Access& a) {
       break;
     case 0x20:
       a.Apply(&afrl_);
+      NoteRouting();
       break;
     case 0x24:
       a.Apply(&afrh_);
+      NoteRouting();
       break;
     case 0x28:
       odr_ &= ~(a.value & a.mask & 0xFFFFu);
@@ -222,27 +231,47 @@ bool GpioPort::Write(const Access& a) {
       return false;
   }
   (void)log_;
-  Refresh();
+  Refresh(output_only ? (odr_before ^ odr_) & 0xFFFFu : 0xFFFFu);
   return true;
 }
 
-Signal PinMux::SignalOn(PinId p) const {
-  const GpioPort& gp = port(p.port);
-  if (gp.mode(p.pin) != PinMode::kAlternate) return Signal::kNone;
-  const unsigned af = gp.af(p.pin);
-  for (const auto& e : AlternateFunctionTable()) {
-    if (e.pin == p && e.af == af) return e.signal;
+PinMux::PinMux(std::array<GpioPort*, 7> ports) : ports_(ports) {
+  for (GpioPort* p : ports_) p->SetRoutingCounter(&routing_changes_);
+}
+
+void PinMux::Update() const {
+  const std::uint64_t generation = routing_changes_;
+  if (generation == generation_) return;
+  generation_ = generation;
+  carrying_.fill(std::nullopt);
+  for (std::uint8_t port = 0; port < 7; ++port) {
+    const GpioPort& gp = *ports_[port];
+    for (std::uint8_t pin = 0; pin < 16; ++pin) {
+      Signal signal = Signal::kNone;
+      if (gp.mode(pin) == PinMode::kAlternate) {
+        const unsigned af = gp.af(pin);
+        for (const auto& e : AlternateFunctionTable()) {
+          if (e.pin == PinId{port, pin} && e.af == af) {
+            signal = e.signal;
+            break;
+          }
+        }
+      }
+      signal_on_[std::size_t{port} * 16 + pin] = signal;
+      auto& first = carrying_[static_cast<std::size_t>(signal)];
+      if (signal != Signal::kNone && !first) first = PinId{port, pin};
+    }
   }
-  return Signal::kNone;
+}
+
+Signal PinMux::SignalOn(PinId p) const {
+  Update();
+  return signal_on_[std::size_t{p.port} * 16 + p.pin];
 }
 
 std::optional<PinId> PinMux::PinCarrying(Signal s) const {
-  for (std::uint8_t port = 0; port < 7; ++port) {
-    for (std::uint8_t pin = 0; pin < 16; ++pin) {
-      if (SignalOn(PinId{port, pin}) == s) return PinId{port, pin};
-    }
-  }
-  return std::nullopt;
+  Update();
+  return carrying_[static_cast<std::size_t>(s)];
 }
 
 }  // namespace mjc::g474model

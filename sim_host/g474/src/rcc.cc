@@ -43,6 +43,7 @@ Rcc::Rcc(ViolationLog* log, const RccConfig& config) : log_(log), config_(config
 void Rcc::PowerOn() { csr_ = csr::kBorrstf | csr::kPinrstf; }
 
 void Rcc::Reset() {
+  clocks_.valid = false;
   const std::uint32_t flags = csr_ & csr::kResetFlags;
   osc_ = {};
   // HSI16 runs after reset and is the system clock (CFGR reset value 0x5: SW = SWS =
@@ -72,12 +73,16 @@ void Rcc::Reset() {
 
 void Rcc::Start(Osc o, Picoseconds delay) {
   if (osc_[o].on) return;
+  clocks_.valid = false;
   osc_[o].on = true;
   osc_[o].ready = false;
   osc_[o].ready_at = now_ + delay;
 }
 
-void Rcc::Stop(Osc o) { osc_[o] = Oscillator{}; }
+void Rcc::Stop(Osc o) {
+  osc_[o] = Oscillator{};
+  clocks_.valid = false;
+}
 
 void Rcc::ForceLsiOn() {
   if (!osc_[kLsi].on) Start(kLsi, config_.lsi_startup);
@@ -172,10 +177,11 @@ void Rcc::UpdateSwitch() {
 }
 
 void Rcc::Changed() {
+  clocks_.valid = false;
   if (change_hook_) change_hook_();
 }
 
-double Rcc::sysclk_hz() const {
+double Rcc::sysclk_hz_now() const {
   switch ((cfgr_ >> 2) & 3u) {
     case 1:
       return kHsiHz;
@@ -189,38 +195,53 @@ double Rcc::sysclk_hz() const {
       return 0;
   }
 }
-double Rcc::hclk_hz() const {
-  return sysclk_hz() / static_cast<double>(AhbDivider((cfgr_ >> 4) & 0xFu));
+double Rcc::hclk_hz_now() const {
+  return sysclk_hz_now() / static_cast<double>(AhbDivider((cfgr_ >> 4) & 0xFu));
 }
-double Rcc::pclk1_hz() const {
-  return hclk_hz() / static_cast<double>(ApbDivider((cfgr_ >> 8) & 7u));
+double Rcc::pclk1_hz_now() const {
+  return hclk_hz_now() / static_cast<double>(ApbDivider((cfgr_ >> 8) & 7u));
 }
-double Rcc::pclk2_hz() const {
-  return hclk_hz() / static_cast<double>(ApbDivider((cfgr_ >> 11) & 7u));
+double Rcc::pclk2_hz_now() const {
+  return hclk_hz_now() / static_cast<double>(ApbDivider((cfgr_ >> 11) & 7u));
 }
 // RM0440 RCC clock tree: the timer clock is PCLK when the APB prescaler is 1, else
 // twice PCLK.
-double Rcc::tim_pclk1_hz() const {
-  return ApbDivider((cfgr_ >> 8) & 7u) == 1 ? pclk1_hz() : 2 * pclk1_hz();
+double Rcc::tim_pclk1_hz_now() const {
+  return ApbDivider((cfgr_ >> 8) & 7u) == 1 ? pclk1_hz_now() : 2 * pclk1_hz_now();
 }
-double Rcc::tim_pclk2_hz() const {
-  return ApbDivider((cfgr_ >> 11) & 7u) == 1 ? pclk2_hz() : 2 * pclk2_hz();
+double Rcc::tim_pclk2_hz_now() const {
+  return ApbDivider((cfgr_ >> 11) & 7u) == 1 ? pclk2_hz_now() : 2 * pclk2_hz_now();
 }
-double Rcc::pllq_hz() const {
+double Rcc::pllq_hz_now() const {
   if (!osc_[kPll].ready || (pllcfgr_ & (1u << 20)) == 0) return 0;
   return PllVcoHz() / (2.0 * static_cast<double>(((pllcfgr_ >> 21) & 3u) + 1u));
 }
-double Rcc::fdcan_kernel_hz() const {
+double Rcc::fdcan_kernel_hz_now() const {
   switch ((ccipr_ >> 24) & 3u) {
     case 0:
       return osc_[kHse].ready ? config_.hse_hz : 0;
     case 1:
-      return pllq_hz();
+      return pllq_hz_now();
     case 2:
-      return pclk1_hz();
+      return pclk1_hz_now();
     default:
       return 0;
   }
+}
+
+void Rcc::Recompute() const {
+  clocks_.sysclk = sysclk_hz_now();
+  clocks_.hclk = hclk_hz_now();
+  clocks_.pclk1 = pclk1_hz_now();
+  clocks_.pclk2 = pclk2_hz_now();
+  clocks_.tim_pclk1 = tim_pclk1_hz_now();
+  clocks_.tim_pclk2 = tim_pclk2_hz_now();
+  clocks_.pllq = pllq_hz_now();
+  clocks_.fdcan_kernel = fdcan_kernel_hz_now();
+  clocks_.sysclk_whole = static_cast<std::uint64_t>(clocks_.sysclk);
+  clocks_.tim_pclk1_whole = static_cast<std::uint64_t>(clocks_.tim_pclk1);
+  clocks_.tim_pclk2_whole = static_cast<std::uint64_t>(clocks_.tim_pclk2);
+  clocks_.valid = true;
 }
 
 bool Rcc::ClockEnabled(Gate g) const {
@@ -352,6 +373,12 @@ bool Rcc::Read(const Access& a, std::uint32_t* v) {
 }
 
 bool Rcc::Write(const Access& a) {
+  const bool known = WriteRegister(a);
+  clocks_.valid = false;
+  return known;
+}
+
+bool Rcc::WriteRegister(const Access& a) {
   switch (a.offset) {
     case 0x00: {
       std::uint32_t current = 0;

@@ -43,6 +43,7 @@ std::uint32_t Spi::Sr() const {
 }
 
 bool Spi::irq() const {
+  if ((cr2_ & 0xE0u) == 0) return false;  // RXNEIE, TXEIE, ERRIE all clear
   const std::uint32_t sr = Sr();
   return ((cr2_ & (1u << 6)) && (sr & 1u)) || ((cr2_ & (1u << 7)) && (sr & 2u)) ||
          ((cr2_ & (1u << 5)) && (ovr_ || modf_));

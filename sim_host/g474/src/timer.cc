@@ -130,7 +130,9 @@ void Timer::Tick(std::uint64_t n) {
 void Timer::Advance(Picoseconds now) {
   const Picoseconds dt = now - now_;
   now_ = now;
-  const double hz = clock_on_ ? kernel_hz() : 0;
+  const std::uint64_t hz = !clock_on_                 ? 0
+                           : kind_ == Kind::kAdvanced ? rcc_->tim_pclk2_whole_hz()
+                                                      : rcc_->tim_pclk1_whole_hz();
   const std::uint64_t clocks = clock_.Advance(dt, hz);
   if (!(cr1_ & kCen) || EncoderMode() || Sms() != 0) {
     return;
@@ -158,13 +160,19 @@ std::uint64_t Timer::TicksToNextUpdate() const {
 }
 
 Picoseconds Timer::NextEvent() const {
-  if (!(cr1_ & kCen) || Sms() != 0 || (cr1_ & kUdis)) return kNever;
   if (!(dier_ & 1u) || (sr_ & 1u)) return kNever;  // no new interrupt to raise
+  return NextUpdate();
+}
+
+Picoseconds Timer::NextUpdate() const {
+  if (!clock_on_ || !(cr1_ & kCen) || Sms() != 0 || (cr1_ & kUdis)) return kNever;
   const std::uint64_t ticks = TicksToNextUpdate();
   if (ticks == 0) return kNever;
   const std::uint64_t div = static_cast<std::uint64_t>(psc_active_) + 1;
   const std::uint64_t clocks = (ticks - 1) * div + (div - psc_count_);
-  const Picoseconds dt = clock_.UntilTicks(clocks, kernel_hz());
+  const Picoseconds dt =
+      clock_.UntilTicks(clocks, kind_ == Kind::kAdvanced ? rcc_->tim_pclk2_whole_hz()
+                                                         : rcc_->tim_pclk1_whole_hz());
   return dt == kNever ? kNever : now_ + dt;
 }
 

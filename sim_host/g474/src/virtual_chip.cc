@@ -103,13 +103,38 @@ VirtualChip::~VirtualChip() = default;
 // ── Time ──────────────────────────────────────────────────────────────────────────
 
 void VirtualChip::SpendCycles(std::uint64_t n) {
-  double f = rcc_.sysclk_hz();
-  if (f <= 0) {
+  std::uint64_t hz64 = rcc_.sysclk_whole_hz();
+  if (hz64 == 0) {
     log_.Report(now_, "RCC", "the system clock is stopped (SYSCLK = 0): the CPU halts");
-    f = 16e6;
+    hz64 = 16'000'000;
   }
   cycles_ += n;
-  const auto hz = static_cast<unsigned __int128>(f);
+  if (n == step_cycles_ && hz64 == step_hz_ && cycle_remainder_ < hz64) {
+    // The same step as the last one at the same clock (every register access): its
+    // quotient and remainder of n × 10^12 / f kept, the carry added by hand — the same
+    // arithmetic as below without its division.
+    std::uint64_t rest = static_cast<std::uint64_t>(cycle_remainder_) + step_rest_;
+    Picoseconds ps = step_ps_;
+    if (rest >= hz64) rest -= hz64, ++ps;
+    cycle_remainder_ = rest;
+    Sync(now_ + ps);
+    return;
+  }
+  if (n < 1'000'000 && cycle_remainder_ < hz64 && hz64 < (std::uint64_t{1} << 32)) {
+    step_cycles_ = n;
+    step_hz_ = hz64;
+    step_ps_ =
+        static_cast<Picoseconds>(n * static_cast<std::uint64_t>(kPsPerSecond) / hz64);
+    step_rest_ = n * static_cast<std::uint64_t>(kPsPerSecond) % hz64;
+    // A register access's few cycles: 64 bits hold n × 10^12 plus the remainder
+    // (< f < 2^32), the same arithmetic without 128-bit division.
+    const std::uint64_t total = static_cast<std::uint64_t>(cycle_remainder_) +
+                                n * static_cast<std::uint64_t>(kPsPerSecond);
+    cycle_remainder_ = total % hz64;
+    Sync(now_ + static_cast<Picoseconds>(total / hz64));
+    return;
+  }
+  const auto hz = static_cast<unsigned __int128>(hz64);
   cycle_remainder_ += static_cast<unsigned __int128>(n) * kPsPerSecond;
   const auto ps = cycle_remainder_ / hz;
   cycle_remainder_ %= hz;
@@ -137,6 +162,18 @@ void VirtualChip::Schedule(Picoseconds at, std::function<void()> fn) {
 
 void VirtualChip::AdvanceModels(Picoseconds t) {
   now_ = t;
+  AdvanceAll();
+}
+
+// Every model to now_. A model's state between two of its events changes only by its
+// counting, which it catches up exactly when advanced over a longer interval, so the
+// chip advances all of them only when an event is due (the deadline) or a world event
+// or a block with wide effects (RCC, PWR, FLASH registers) needs them all current; an
+// access to one block brings just that block (and what its state depends on) to now.
+// The result is the same as advancing every model at every access, at a fraction of
+// the cost (each access used to advance nine models).
+void VirtualChip::AdvanceAll() {
+  const Picoseconds t = now_;
   UpdateGates();
   rcc_.Advance(t);
   pwr_.Advance(t);
@@ -151,9 +188,128 @@ void VirtualChip::AdvanceModels(Picoseconds t) {
   fdcan1_.Advance(t);
   iwdg_.Advance(t);
   cortex_.Advance(t);
+  for (std::size_t i = 0; i < kTimedModels; ++i) next_[i] = Timed(i)->NextEvent();
+  UpdateDeadline();
+  lines_dirty_ = kAllLines;
+}
+
+// The models whose next event has come, each brought to now_ (all of them when it is
+// the RCC's or the PWR's: a clock that changes moves every model's time base).
+void VirtualChip::AdvanceDue() {
+  if (next_[0] <= now_ || next_[1] <= now_) {
+    AdvanceAll();
+    return;
+  }
+  for (std::size_t i = 2; i < kTimedModels; ++i) {
+    if (next_[i] > now_) continue;
+    Peripheral* m = Timed(i);
+    if (m == &fdcan1_ && (can_tx_ || can_rx_)) {
+      fdcan1_.SetPinsRouted(!can_tx_ || mux_.PinCarrying(Signal::kFdcan1Tx) == can_tx_,
+                            !can_rx_ || mux_.PinCarrying(Signal::kFdcan1Rx) == can_rx_);
+    }
+    m->Advance(now_);
+    next_[i] = m->NextEvent();
+    lines_dirty_ |= LinesOf(m);
+  }
+  UpdateDeadline();
+}
+
+// The interrupt lines (bits in kIrqs' order) a model drives.
+unsigned VirtualChip::LinesOf(const Peripheral* m) const {
+  if (m == &flash_) return 1u << 0;
+  if (m == &fdcan1_) return 3u << 1;
+  if (m == &tim1_) return 1u << 3;
+  if (m == &tim3_) return 1u << 4;
+  if (m == &spi1_) return 1u << 5;
+  return kAllLines;
+}
+
+Peripheral* VirtualChip::Timed(std::size_t i) {
+  Peripheral* const models[kTimedModels] = {&rcc_,  &pwr_,  &flash_,  &tim1_,
+                                            &tim3_, &spi1_, &fdcan1_, &iwdg_};
+  return models[i];
+}
+
+void VirtualChip::UpdateDeadline() {
+  deadline_ = kNever;
+  for (const Picoseconds e : next_) deadline_ = e < deadline_ ? e : deadline_;
+}
+
+void VirtualChip::Note(Peripheral* model) {
+  std::size_t i = 0;
+  if (model == &tim1_) {
+    i = 3;
+  } else if (model == &tim3_) {
+    i = 4;
+  } else if (model == &spi1_) {
+    i = 5;
+  } else if (model == &fdcan1_) {
+    i = 6;
+  } else if (model == &iwdg_) {
+    i = 7;
+  } else if (model == &flash_) {
+    i = 2;
+  } else {
+    AdvanceAll();
+    return;
+  }
+  next_[i] = model->NextEvent();
+  UpdateDeadline();
+  lines_dirty_ |= LinesOf(model);
+}
+
+void VirtualChip::Bring(const Route& route) {
+  Peripheral* m = route.model;
+  if (m == &cortex_) {
+    cortex_.Advance(now_);
+  } else if (m == &rcc_ || m == &pwr_ || (m == &flash_ && route.kind == 0)) {
+    AdvanceAll();  // clocks and latency: every model's time base may change
+  } else if (m == &fdcan1_) {
+    if (can_tx_ || can_rx_) {
+      fdcan1_.SetPinsRouted(!can_tx_ || mux_.PinCarrying(Signal::kFdcan1Tx) == can_tx_,
+                            !can_rx_ || mux_.PinCarrying(Signal::kFdcan1Rx) == can_rx_);
+    }
+    fdcan1_.Advance(now_);
+  } else if (m == &tim1_ || m == &tim3_ || m == &spi1_ || m == &iwdg_ || m == &flash_) {
+    m->Advance(now_);
+  } else if (!OutputOnly(route)) {
+    // A GPIO port: its AF pins show the timers' outputs, its inputs feed them. (A write
+    // of ODR, BSRR or BRR moves only pins in output mode, which no timer sees.)
+    tim1_.Advance(now_);
+    tim3_.Advance(now_);
+  }
+}
+
+bool VirtualChip::OutputOnly(const Route& route) const {
+  return route.offset == 0x14 || route.offset == 0x18 || route.offset == 0x28;
+}
+
+void VirtualChip::Settle(const Route& route) {
+  Peripheral* m = route.model;
+  if (m == &rcc_ || m == &pwr_ || (m == &flash_ && route.kind == 0)) {
+    UpdateGates();
+    AdvanceAll();
+  } else if (m == &cortex_) {
+    return;  // no timed events (DWT counts CPU cycles; the NVIC is sampled below)
+  } else if (m == &iwdg_) {
+    // Starting the watchdog forces the LSI on (RM0440 IWDG): the RCC's next event too.
+    next_[0] = rcc_.NextEvent();
+    Note(m);
+  } else if (m == &tim1_ || m == &tim3_ || m == &spi1_ || m == &flash_ || m == &fdcan1_) {
+    Note(m);
+  } else if (!OutputOnly(route)) {
+    // A GPIO port: the timers' inputs may have moved (an encoder count, a wrap's UIF),
+    // their next update events did not.
+    lines_dirty_ |= LinesOf(&tim1_) | LinesOf(&tim3_);
+  }
 }
 
 void VirtualChip::Sync(Picoseconds t) {
+  if (t <= limit_ && t < deadline_ && (events_.empty() || events_.begin()->first > t) &&
+      !reset_pending_) {
+    if (t > now_) now_ = t;  // nothing due: the models catch up when next needed
+    return;
+  }
   if (t > limit_) {
     AdvanceModels(limit_);
     throw TimeLimitReached{limit_};
@@ -167,8 +323,10 @@ void VirtualChip::Sync(Picoseconds t) {
     AdvanceModels(at);
     if (reset_pending_) DoReset(*reset_pending_);
     fn();
+    lines_dirty_ = kAllLines;  // the world may have moved a line (a frame, a bus-off)
   }
-  AdvanceModels(t > now_ ? t : now_);
+  if (t > now_) now_ = t;
+  if (now_ >= deadline_) AdvanceDue();
   if (reset_pending_) DoReset(*reset_pending_);
 }
 
@@ -182,45 +340,58 @@ void VirtualChip::UpdateGates() {
 // ── Bus ───────────────────────────────────────────────────────────────────────────
 
 std::optional<VirtualChip::Route> VirtualChip::Decode(std::uint32_t a) {
-  if (Flash::InArray(a) || Flash::InInfo(a)) return Route{&flash_, a, std::nullopt, 1};
+  // Most frequent first: the core's registers (the DWT's counter in the drivers' hold
+  // loops), then the peripherals by their 1 KB block.
   if (a >= 0xE0000000u && a < 0xE0100000u) {
     return Route{&cortex_, a - Cortex::kBase, std::nullopt, 0};
-  }
-  if (a >= Fdcan::kRamBase && a < Fdcan::kRamBase + Fdcan::kRamSize) {
-    return Route{&fdcan1_, a - Fdcan::kRamBase, Gate::kFdcan, 2};
-  }
-  struct Block {
-    std::uint32_t base, size;
-    Peripheral* model;
-    std::optional<Gate> gate;
-    int kind;
-  };
-  const Block blocks[] = {
-      {Timer::kTim3Base, 0x400, &tim3_, Gate::kTim3, 0},
-      {Iwdg::kBase, 0x400, &iwdg_, std::nullopt, 0},
-      {Fdcan::kFdcan1Base, 0x100, &fdcan1_, Gate::kFdcan, 0},
-      {Fdcan::kConfigBase, 0x300, &fdcan1_, Gate::kFdcan, 3},
-      {Pwr::kBase, 0x400, &pwr_, Gate::kPwr, 0},
-      {Timer::kTim1Base, 0x400, &tim1_, Gate::kTim1, 0},
-      {Spi::kSpi1Base, 0x400, &spi1_, Gate::kSpi1, 0},
-      {Rcc::kBase, 0x400, &rcc_, std::nullopt, 0},
-      {Flash::kBase, 0x400, &flash_, Gate::kFlash, 0},
-  };
-  for (const auto& b : blocks) {
-    if (a >= b.base && a < b.base + b.size)
-      return Route{b.model, a - b.base, b.gate, b.kind};
   }
   if (a >= GpioPort::kBase && a < GpioPort::kBase + 7 * 0x400) {
     const std::uint32_t port = (a - GpioPort::kBase) / 0x400;
     return Route{gpio_[port].get(), (a - GpioPort::kBase) % 0x400,
                  static_cast<Gate>(static_cast<unsigned>(Gate::kGpioA) + port), 0};
   }
-  return std::nullopt;
+  if (Flash::InArray(a) || Flash::InInfo(a)) return Route{&flash_, a, std::nullopt, 1};
+  if (a >= Fdcan::kRamBase && a < Fdcan::kRamBase + Fdcan::kRamSize) {
+    return Route{&fdcan1_, a - Fdcan::kRamBase, Gate::kFdcan, 2};
+  }
+  if (a >= Fdcan::kFdcan1Base && a < Fdcan::kFdcan1Base + 0x100) {
+    return Route{&fdcan1_, a - Fdcan::kFdcan1Base, Gate::kFdcan, 0};
+  }
+  if (a >= Fdcan::kConfigBase && a < Fdcan::kConfigBase + 0x300) {
+    return Route{&fdcan1_, a - Fdcan::kConfigBase, Gate::kFdcan, 3};
+  }
+  const std::uint32_t offset = a & 0x3FFu;
+  switch (a & ~0x3FFu) {
+    case Timer::kTim3Base:
+      return Route{&tim3_, offset, Gate::kTim3, 0};
+    case Iwdg::kBase:
+      return Route{&iwdg_, offset, std::nullopt, 0};
+    case Pwr::kBase:
+      return Route{&pwr_, offset, Gate::kPwr, 0};
+    case Timer::kTim1Base:
+      return Route{&tim1_, offset, Gate::kTim1, 0};
+    case Spi::kSpi1Base:
+      return Route{&spi1_, offset, Gate::kSpi1, 0};
+    case Rcc::kBase:
+      return Route{&rcc_, offset, std::nullopt, 0};
+    case Flash::kBase:
+      return Route{&flash_, offset, Gate::kFlash, 0};
+    default:
+      return std::nullopt;
+  }
 }
 
 std::uint32_t VirtualChip::Read(stm32g4::Address address, unsigned bytes) {
   SpendCycles(config_.access_cycles);
-  if ((bytes != 2 && bytes != 4) || address % bytes != 0) {
+  if (address == Cortex::kBase + Cortex::kDwtCyccnt && bytes == 4) {
+    // The drivers' hold loops read DWT_CYCCNT dozens of times a tick: a core register
+    // with no timed events and no interrupt line, read straight from the model.
+    cortex_.Advance(now_);
+    const std::uint32_t count = cortex_.cyccnt();
+    ServiceInterrupts(false);
+    return count;
+  }
+  if ((bytes != 2 && bytes != 4) || (address & (bytes - 1)) != 0) {
     log_.Report(now_, "bus", "unaligned or odd-sized read at " + Hex(address));
     return 0;
   }
@@ -239,6 +410,16 @@ std::uint32_t VirtualChip::Read(stm32g4::Address address, unsigned bytes) {
     ServiceInterrupts();
     return 0;
   }
+  // A read of the FLASH registers changes no clock and no latency (a write may): it
+  // brings only the FLASH block, as its own events do (AdvanceDue). The flash driver
+  // polls FLASH_SR a million times through a page erase; advancing every model at
+  // each of those reads made the virtual board 10x slower than real time meanwhile.
+  const bool flash_register = route->model == &flash_ && route->kind == 0;
+  if (flash_register) {
+    flash_.Advance(now_);
+  } else {
+    Bring(*route);
+  }
   std::uint32_t value = 0;
   bool ok = false;
   if (route->kind == 1) {
@@ -248,8 +429,10 @@ std::uint32_t VirtualChip::Read(stm32g4::Address address, unsigned bytes) {
       const Picoseconds stall = flash_.TakeStall();
       if (stall == 0) break;
       Sync(stall);  // the bus waits for the busy bank
+      Bring(*route);
     }
     if (!ok) log_.Report(now_, "bus", "read at " + Hex(address) + " outside the flash");
+    Settle(*route);
     ServiceInterrupts();
     return value;
   }
@@ -263,6 +446,8 @@ std::uint32_t VirtualChip::Read(stm32g4::Address address, unsigned bytes) {
     ok = fdcan1_.ReadRam(acc, &word);
   } else if (route->kind == 3) {
     ok = fdcan1_.ReadConfig(acc, &word);
+  } else if (route->model == &cortex_) {
+    ok = cortex_.Read(acc, &word);
   } else {
     ok = route->model->Read(acc, &word);
   }
@@ -271,13 +456,18 @@ std::uint32_t VirtualChip::Read(stm32g4::Address address, unsigned bytes) {
     word = 0;
   }
   value = bytes == 4 ? word : (word >> shift) & 0xFFFFu;
-  ServiceInterrupts();
+  if (flash_register) {
+    Note(&flash_);
+  } else {
+    Settle(*route);
+  }
+  ServiceInterrupts(false);
   return value;
 }
 
 void VirtualChip::Write(stm32g4::Address address, std::uint32_t value, unsigned bytes) {
   SpendCycles(config_.access_cycles);
-  if ((bytes != 2 && bytes != 4) || address % bytes != 0) {
+  if ((bytes != 2 && bytes != 4) || (address & (bytes - 1)) != 0) {
     log_.Report(now_, "bus", "unaligned or odd-sized write at " + Hex(address));
     return;
   }
@@ -295,6 +485,7 @@ void VirtualChip::Write(stm32g4::Address address, std::uint32_t value, unsigned 
     ServiceInterrupts();
     return;
   }
+  Bring(*route);
   if (route->kind == 1) {
     bool ok = false;
     for (int tries = 0; tries < 3 && !ok; ++tries) {
@@ -304,9 +495,12 @@ void VirtualChip::Write(stm32g4::Address address, std::uint32_t value, unsigned 
         const Picoseconds stall = flash_.TakeStall();
         if (stall == 0) break;
         Sync(stall);
+        Bring(*route);
       }
     }
     if (!ok) log_.Report(now_, "bus", "write at " + Hex(address) + " not taken");
+    Settle(*route);
+    if (reset_pending_) DoReset(*reset_pending_);
     ServiceInterrupts();
     return;
   }
@@ -326,9 +520,12 @@ void VirtualChip::Write(stm32g4::Address address, std::uint32_t value, unsigned 
   }
   if (!ok) log_.Report(now_, "bus", "write at " + Hex(address) + ": reserved register");
   if (route->model == &flash_ && acc.offset == 0) CheckClocks();
-  UpdateGates();
+  Settle(*route);  // the clock gates too, after an RCC write
+  // An NVIC write (a pending bit cleared while its line is still high) has every line
+  // sampled again; Settle marked the lines of the other blocks.
+  if (route->model == &cortex_) lines_dirty_ = kAllLines;
   if (reset_pending_) DoReset(*reset_pending_);
-  ServiceInterrupts();
+  ServiceInterrupts(false);
 }
 
 // ── Interrupts ────────────────────────────────────────────────────────────────────
@@ -366,12 +563,23 @@ void VirtualChip::MaskInterrupts(bool masked) {
   if (!masked) ServiceInterrupts();
 }
 
-void VirtualChip::ServiceInterrupts() {
+void VirtualChip::ServiceInterrupts(bool sample) {
   for (;;) {
-    for (int n : kIrqs) {
-      if (LineHigh(n) && !cortex_.active(n)) cortex_.SetPending(n, true);
+    // The lines are sampled unless nothing since the last sampling could have moved
+    // one (an access to the DWT or the SCB's registers: the spin loops the drivers time
+    // their holds with).
+    const unsigned lines = sample ? kAllLines : lines_dirty_;
+    if (lines != 0) {
+      lines_dirty_ &= ~lines;
+      for (std::size_t i = 0; i < std::size(kIrqs); ++i) {
+        const int n = kIrqs[i];
+        if (((lines >> i) & 1u) && LineHigh(n) && !cortex_.active(n)) {
+          cortex_.SetPending(n, true);
+        }
+      }
     }
-    if (primask_) return;
+    sample = true;  // after a handler: its exit may leave a line high
+    if (primask_ || !cortex_.AnyCandidate()) return;
     int best = -1;
     std::uint32_t best_priority = 0;
     for (int n = 0; n < Cortex::kIrqCount; ++n) {
@@ -425,7 +633,7 @@ void VirtualChip::WaitForInterrupt() {
     for (int n : kIrqs) {
       if (LineHigh(n) && !cortex_.active(n)) cortex_.SetPending(n, true);
     }
-    for (int n = 0; n < Cortex::kIrqCount; ++n) {
+    for (int n = 0; cortex_.AnyCandidate() && n < Cortex::kIrqCount; ++n) {
       if (cortex_.pending(n) && cortex_.enabled(n) &&
           static_cast<int>(cortex_.GroupPriority(cortex_.priority(n))) <
               CurrentPriority()) {
@@ -433,10 +641,10 @@ void VirtualChip::WaitForInterrupt() {
         return;
       }
     }
+    // Every model current, so each one's next event is known (next_).
+    if (deadline_ <= now_) AdvanceAll();
     Picoseconds next = events_.empty() ? kNever : events_.begin()->first;
-    for (Peripheral* p : std::initializer_list<Peripheral*>{
-             &rcc_, &pwr_, &flash_, &tim1_, &tim3_, &spi1_, &fdcan1_, &iwdg_}) {
-      const Picoseconds e = p->NextEvent();
+    for (const Picoseconds e : next_) {
       if (e > now_ && e < next) next = e;
     }
     if (next == kNever) {
@@ -483,7 +691,7 @@ void VirtualChip::DoReset(ResetCause cause) {
   active_stack_.clear();
   primask_ = false;
   cycle_remainder_ = 0;
-  UpdateGates();
+  AdvanceAll();
   if (reset_handler_) reset_handler_(cause);
 }
 
@@ -594,6 +802,7 @@ void VirtualChip::AttachEncoder(PinId a, PinId b) {
 
 void VirtualChip::MoveEncoder(std::int64_t position) {
   if (!enc_a_ || !enc_b_) return;
+  tim3_.Advance(now_);
   while (encoder_pos_ != position) {
     encoder_pos_ += position > encoder_pos_ ? 1 : -1;
     // Quadrature states (A, B) for position mod 4: 00, 10, 11, 01 (forward = A leads).
@@ -618,7 +827,9 @@ void VirtualChip::AttachCanTransceiver(PinId tx, PinId rx) {
 
 bool VirtualChip::DeliverCanFrame(const CanBusFrame& frame) {
   Sync(now_);
+  AdvanceAll();
   const bool taken = fdcan1_.Receive(frame);
+  Note(&fdcan1_);
   ServiceInterrupts();
   return taken;
 }

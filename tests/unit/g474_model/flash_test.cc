@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <fstream>
 #include <string>
+#include <vector>
 
 #include "mjc/g474model/virtual_chip.h"
 
@@ -145,6 +147,19 @@ TEST(G474Flash, PowerCutDuringProgramLeavesAMixAndResetsTheChip) {
   EXPECT_TRUE(c.Read(kCr, 4) & (1u << 31));  // locked again after the reset
 }
 
+// A whole file's bytes (none when it cannot be read).
+std::vector<char> ReadFile(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  std::vector<char> bytes;
+  if (f == nullptr) return bytes;
+  char block[4096];
+  for (std::size_t n; (n = std::fread(block, 1, sizeof block, f)) > 0;) {
+    bytes.insert(bytes.end(), block, block + n);
+  }
+  std::fclose(f);
+  return bytes;
+}
+
 TEST(G474Flash, ContentsPersistToAFile) {
   const std::string path =
       "/tmp/g474_flash_test_" + std::to_string(static_cast<long>(getpid())) + ".bin";
@@ -156,10 +171,37 @@ TEST(G474Flash, ContentsPersistToAFile) {
     Unlock(c);
     Program(c, 0x0807F000, 0x0123456789ABCDEFull);
   }
+  // The file itself: the whole array, erased but for the double-word, little-endian.
+  const std::vector<char> bytes = ReadFile(path);
+  ASSERT_EQ(bytes.size(), Flash::kSize);
+  const unsigned char want[8] = {0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23, 0x01};
+  for (unsigned i = 0; i < 8; ++i) {
+    EXPECT_EQ(static_cast<unsigned char>(bytes[0x7F000 + i]), want[i]) << i;
+  }
+  EXPECT_EQ(static_cast<unsigned char>(bytes[0x7F008]), 0xFF);
+  EXPECT_EQ(static_cast<unsigned char>(bytes[0]), 0xFF);
   ChipConfig cfg;
   cfg.flash.path = path;
   VirtualChip c(cfg);
+  EXPECT_TRUE(c.flash().mirrored());
   EXPECT_EQ(c.Read(0x0807F000, 4), 0x89ABCDEFu);
+  std::remove(path.c_str());
+}
+
+TEST(G474Flash, AFileOfAnotherSizeIsLeftAlone) {
+  const std::string path =
+      "/tmp/g474_flash_other_" + std::to_string(static_cast<long>(getpid())) + ".bin";
+  std::ofstream(path, std::ios::binary) << std::string(4096, '\x00');
+  {
+    ChipConfig cfg;
+    cfg.flash.path = path;
+    VirtualChip c(cfg);
+    EXPECT_FALSE(c.flash().mirrored());
+    EXPECT_EQ(c.Read(0x0807F000, 4), 0xFFFFFFFFu);  // erased, not the file's zeros
+    Unlock(c);
+    Program(c, 0x0807F000, 0x0123456789ABCDEFull);
+  }
+  EXPECT_EQ(ReadFile(path), std::vector<char>(4096, '\x00'));
   std::remove(path.c_str());
 }
 

@@ -50,8 +50,10 @@ struct UploadOutcome {
 };
 
 // Uploads `record` to `node` on `iface` (ISO-TP on the node's 0x3E/0x3F ids) and waits
-// up to timeout_ms for the board's answer. Unless the status is kAnswered, *why says
-// what went wrong.
+// for the board's answer as long as Patience{timeout_ms} allows: timeout_ms of the
+// board's own time (its heartbeats' ticks: a board simulated slower than real time,
+// programming its flash, is given its time), or the default silence with no frame from
+// it. Unless the status is kAnswered, *why says what went wrong.
 UploadOutcome UploadCalibration(const std::string& iface, int node,
                                 const protocol::CalibrationRecord& record, int timeout_ms,
                                 std::string* why);

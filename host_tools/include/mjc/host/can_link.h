@@ -154,7 +154,12 @@ class IsoTpLink {
   IsoTpLink& operator=(const IsoTpLink&) = delete;
 
   bool Send(std::span<const std::uint8_t> payload, std::string* why);
-  std::optional<std::vector<std::uint8_t>> Receive(int timeout_ms, std::string* why);
+  // The next whole payload, waiting up to timeout_ms (0: only what is there). nullopt
+  // with the reason in *why when none came; *failed (when given) then tells a socket
+  // error or a transfer of ours the peer never answered with flow control (true) from
+  // a plain timeout (false).
+  std::optional<std::vector<std::uint8_t>> Receive(int timeout_ms, std::string* why,
+                                                   bool* failed = nullptr);
 
  private:
   explicit IsoTpLink(int fd, std::string interface)

@@ -90,7 +90,21 @@ class TickCounter {
   // Ticks elapsed in `dt` at `hz` (0 when hz is 0: a stopped clock).
   std::uint64_t Advance(Picoseconds dt, double hz) {
     if (dt <= 0 || hz <= 0) return 0;
-    const auto f = static_cast<unsigned __int128>(hz);
+    return Advance(dt, static_cast<std::uint64_t>(hz));
+  }
+  // The same for a clock already in whole hertz (what the double's truncation gives).
+  std::uint64_t Advance(Picoseconds dt, std::uint64_t f64) {
+    if (dt <= 0 || f64 == 0) return 0;
+    if (dt < (Picoseconds{1} << 31) && f64 < (std::uint64_t{1} << 32)) {
+      // The common case (one register access, a clock below 4.3 GHz): the product and
+      // the remainder (< 10^12 < 2^40) fit 64 bits, and so does their sum; the same
+      // arithmetic as below, without 128-bit division.
+      const auto sum =
+          static_cast<std::uint64_t>(remainder_) + static_cast<std::uint64_t>(dt) * f64;
+      remainder_ = sum % static_cast<std::uint64_t>(kPsPerSecond);
+      return sum / static_cast<std::uint64_t>(kPsPerSecond);
+    }
+    const auto f = static_cast<unsigned __int128>(f64);
     remainder_ += static_cast<unsigned __int128>(dt) * f;
     const auto ticks = remainder_ / kPsPerSecond;
     remainder_ %= kPsPerSecond;
@@ -99,7 +113,18 @@ class TickCounter {
   // Time from now until `ticks` more ticks have elapsed at `hz`.
   Picoseconds UntilTicks(std::uint64_t ticks, double hz) const {
     if (hz <= 0) return kNever;
-    const auto f = static_cast<unsigned __int128>(hz);
+    return UntilTicks(ticks, static_cast<std::uint64_t>(hz));
+  }
+  Picoseconds UntilTicks(std::uint64_t ticks, std::uint64_t f64) const {
+    if (f64 == 0) return kNever;
+    if (ticks < (std::uint64_t{1} << 24) && f64 < (std::uint64_t{1} << 32)) {
+      // ticks × 10^12 < 2^64, and so is what is added to it: 64-bit arithmetic.
+      const std::uint64_t need = ticks * static_cast<std::uint64_t>(kPsPerSecond);
+      const auto rest = static_cast<std::uint64_t>(remainder_);
+      if (need <= rest) return 0;
+      return static_cast<Picoseconds>((need - rest + f64 - 1) / f64);
+    }
+    const auto f = static_cast<unsigned __int128>(f64);
     const unsigned __int128 need = static_cast<unsigned __int128>(ticks) * kPsPerSecond;
     if (need <= remainder_) return 0;
     const unsigned __int128 ps = (need - remainder_ + f - 1) / f;

@@ -27,7 +27,8 @@ namespace mjc::g474model {
 class Cortex final : public Peripheral {
  public:
   static constexpr std::uint32_t kBase = 0xE0000000;
-  static constexpr int kIrqCount = 102;  // RM0440 vector table: IRQ 0..101
+  static constexpr std::uint32_t kDwtCyccnt = 0x1004;  // offset (ARMv7-M ARM C1.8.7)
+  static constexpr int kIrqCount = 102;                // RM0440 vector table: IRQ 0..101
 
   Cortex(ViolationLog* log, const std::uint64_t* cpu_cycles)
       : log_(log), cycles_(cpu_cycles) {
@@ -44,6 +45,8 @@ class Cortex final : public Peripheral {
   bool active(int irq) const { return active_[static_cast<std::size_t>(irq)]; }
   void SetPending(int irq, bool p) { pending_[static_cast<std::size_t>(irq)] = p; }
   void SetActive(int irq, bool a) { active_[static_cast<std::size_t>(irq)] = a; }
+  // Some IRQ is pending and enabled but not active: a candidate for entry.
+  bool AnyCandidate() const { return (pending_ & enabled_ & ~active_).any(); }
   // The IPR byte (only bits 7:4 implemented).
   std::uint8_t priority(int irq) const {
     return priority_[static_cast<std::size_t>(irq)];
@@ -56,6 +59,8 @@ class Cortex final : public Peripheral {
   std::uint32_t vtor() const { return vtor_; }
   // DWT.CYCCNT is counting (DEMCR.TRCENA and DWT_CTRL.CYCCNTENA).
   bool cyccnt_running() const { return (demcr_ & (1u << 24)) && (dwt_ctrl_ & 1u); }
+  // DWT_CYCCNT as a read returns it.
+  std::uint32_t cyccnt() const { return Cyccnt(); }
 
   // Called on AIRCR.SYSRESETREQ with the right VECTKEY.
   void SetResetRequestHook(std::function<void()> hook) { reset_hook_ = std::move(hook); }

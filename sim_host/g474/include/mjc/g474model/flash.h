@@ -47,7 +47,12 @@
 namespace mjc::g474model {
 
 struct FlashConfig {
-  std::string path;  // persistence file ("" = none); loaded if its size matches
+  // Persistence file ("" = none): loaded when its size is the array's, and kept up to
+  // date after every erase and program — the page or double-word it changed, one write
+  // each, so a process killed at any moment leaves the file as the operations that had
+  // completed left it. A missing file is created erased; a file of another size is left
+  // untouched and not kept (the array starts erased).
+  std::string path;
   Picoseconds program_time = Microseconds(81.7);
   Picoseconds page_erase_time = Microseconds(22020);
   Picoseconds mass_erase_time = Microseconds(22130);
@@ -72,6 +77,9 @@ class Flash final : public Peripheral {
                                  kOptverr = 1u << 15, kBsy = 1u << 16;
 
   Flash(ViolationLog* log, FlashConfig config);
+  ~Flash() override;
+  Flash(const Flash&) = delete;
+  Flash& operator=(const Flash&) = delete;
 
   // The register block.
   bool Read(const Access& a, std::uint32_t* value) override;
@@ -99,6 +107,8 @@ class Flash final : public Peripheral {
     return s;
   }
 
+  // True when a persistence file was given and is being kept up to date.
+  bool mirrored() const { return file_ >= 0; }
   std::uint32_t latency() const { return acr_ & 0xFu; }
   bool busy() const { return op_.kind != OpKind::kNone; }
   bool locked() const { return (cr_ & (1u << 31)) != 0; }
@@ -137,12 +147,14 @@ class Flash final : public Peripheral {
   void Complete();
   void Interrupt();
   int BankOf(std::uint32_t offset) const { return offset < kSize / 2 ? 0 : 1; }
-  void Save() const;
+  // Writes array bytes [offset, offset + bytes) to the persistence file, if kept.
+  void Save(std::uint32_t offset, std::uint32_t bytes) const;
 
   ViolationLog* log_;
   FlashConfig config_;
   Picoseconds now_ = 0;
   std::vector<std::uint8_t> memory_;
+  int file_ = -1;  // the persistence file, open for writing; -1: none
   std::uint32_t acr_ = 0, sr_ = 0, cr_ = 0, optr_ = 0;
   std::uint32_t wrp_[4] = {};  // WRP1AR, WRP1BR, WRP2AR, WRP2BR
   int key_stage_ = 0;          // 1 after KEY1

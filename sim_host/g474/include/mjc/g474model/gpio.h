@@ -114,16 +114,25 @@ class GpioPort final : public Peripheral {
     level_hook_ = std::move(hook);
   }
 
+  // Counts changes of MODER, AFRL and AFRH (and resets) in *counter: what the AF
+  // routing depends on, so PinMux recomputes it only when one of these changed.
+  void SetRoutingCounter(std::uint64_t* counter) { routing_counter_ = counter; }
+
   // The level on the pin now; nullopt when nothing drives it (floating).
   std::optional<bool> Level(int pin) const;
-  // Re-evaluates every pin and reports changes (after any register or world change).
-  void Refresh();
+  // Re-evaluates the pins in `pins` (a bit per pin) and reports changes (after a
+  // register or world change that may move them).
+  void Refresh(std::uint32_t pins = 0xFFFFu);
 
  private:
   int port_;
   ViolationLog* log_;
   std::uint32_t moder_ = 0, otyper_ = 0, ospeedr_ = 0, pupdr_ = 0, odr_ = 0, lckr_ = 0,
                 afrl_ = 0, afrh_ = 0;
+  void NoteRouting() {
+    if (routing_counter_ != nullptr) ++*routing_counter_;
+  }
+  std::uint64_t* routing_counter_ = nullptr;
   std::array<std::optional<bool>, 16> external_{};
   std::array<bool, 16> last_level_{};
   std::function<Drive(PinId)> af_drive_;
@@ -133,7 +142,7 @@ class GpioPort final : public Peripheral {
 // Routing questions over all ports.
 class PinMux {
  public:
-  explicit PinMux(std::array<GpioPort*, 7> ports) : ports_(ports) {}
+  explicit PinMux(std::array<GpioPort*, 7> ports);
   // The signal a pin carries now (AF mode and a table AF number), or kNone.
   Signal SignalOn(PinId p) const;
   // The pins that carry `s` now (normally one).
@@ -141,7 +150,17 @@ class PinMux {
   GpioPort& port(int i) const { return *ports_[static_cast<std::size_t>(i)]; }
 
  private:
+  static constexpr std::size_t kPins = 7 * 16;
+  static constexpr std::size_t kSignals = static_cast<std::size_t>(Signal::kFdcan1Tx) + 1;
+  // Every register access asks the routing (the chip checks the CAN pins on each):
+  // it is recomputed only when a port's MODER/AFR changed since.
+  void Update() const;
+
   std::array<GpioPort*, 7> ports_;
+  std::uint64_t routing_changes_ = 0;
+  mutable std::uint64_t generation_ = ~std::uint64_t{0};
+  mutable std::array<Signal, kPins> signal_on_{};
+  mutable std::array<std::optional<PinId>, kSignals> carrying_{};
 };
 
 }  // namespace mjc::g474model

@@ -85,15 +85,23 @@ class Rcc final : public Peripheral {
   void PowerOn();
   void SetResetFlags(std::uint32_t flags) { csr_ |= flags & csr::kResetFlags; }
 
-  // Frequencies in Hz; 0 while the source is off or not ready.
-  double sysclk_hz() const;
-  double hclk_hz() const;
-  double pclk1_hz() const;
-  double pclk2_hz() const;
-  double tim_pclk1_hz() const;  // TIM2..7 kernel clock
-  double tim_pclk2_hz() const;  // TIM1/8/15/16/17/20 kernel clock
-  double pllq_hz() const;       // 0 unless PLLQEN and the PLL is locked
-  double fdcan_kernel_hz() const;
+  // Frequencies in Hz; 0 while the source is off or not ready. Asked at every register
+  // access (the chip's time, the timers' counting), so computed once per change of the
+  // registers or oscillators they depend on.
+  double sysclk_hz() const { return clocks().sysclk; }
+  double hclk_hz() const { return clocks().hclk; }
+  double pclk1_hz() const { return clocks().pclk1; }
+  double pclk2_hz() const { return clocks().pclk2; }
+  double tim_pclk1_hz() const { return clocks().tim_pclk1; }  // TIM2..7 kernel clock
+  double tim_pclk2_hz() const {
+    return clocks().tim_pclk2;  // TIM1/8/15/16/17/20 kernel clock
+  }
+  double pllq_hz() const { return clocks().pllq; }  // 0 unless PLLQEN and locked
+  double fdcan_kernel_hz() const { return clocks().fdcan_kernel; }
+  // The same truncated to whole hertz (the models count clock edges in integers).
+  std::uint64_t sysclk_whole_hz() const { return clocks().sysclk_whole; }
+  std::uint64_t tim_pclk1_whole_hz() const { return clocks().tim_pclk1_whole; }
+  std::uint64_t tim_pclk2_whole_hz() const { return clocks().tim_pclk2_whole; }
   double lsi_hz() const { return lsi_ready() ? config_.lsi_hz : 0; }
   bool lsi_ready() const { return (csr_ & csr::kLsirdy) != 0; }
   // The IWDG forces the LSI on (RM0440 IWDG: "the LSI is forced ON").
@@ -117,6 +125,26 @@ class Rcc final : public Peripheral {
     bool ready = false;
     Picoseconds ready_at = kNever;  // when a started oscillator becomes ready
   };
+  struct Clocks {
+    bool valid = false;
+    double sysclk = 0, hclk = 0, pclk1 = 0, pclk2 = 0, tim_pclk1 = 0, tim_pclk2 = 0,
+           pllq = 0, fdcan_kernel = 0;
+    std::uint64_t sysclk_whole = 0, tim_pclk1_whole = 0, tim_pclk2_whole = 0;
+  };
+  const Clocks& clocks() const {
+    if (!clocks_.valid) Recompute();
+    return clocks_;
+  }
+  void Recompute() const;
+  double sysclk_hz_now() const;
+  double hclk_hz_now() const;
+  double pclk1_hz_now() const;
+  double pclk2_hz_now() const;
+  double tim_pclk1_hz_now() const;
+  double tim_pclk2_hz_now() const;
+  double pllq_hz_now() const;
+  double fdcan_kernel_hz_now() const;
+  bool WriteRegister(const Access& a);
   void Start(Osc o, Picoseconds delay);
   void Stop(Osc o);
   void UpdateSwitch();
@@ -139,6 +167,7 @@ class Rcc final : public Peripheral {
   std::uint32_t ccipr_ = 0, bdcr_ = 0, csr_ = 0, crrcr_ = 0, ccipr2_ = 0;
   std::function<void(Gate)> reset_hook_;
   std::function<void()> change_hook_;
+  mutable Clocks clocks_;
 };
 
 // PWR (RM0440 "Power control (PWR)"): the voltage range and Range 1 boost mode the

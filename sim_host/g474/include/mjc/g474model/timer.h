@@ -67,6 +67,11 @@ class Timer final : public Peripheral {
   OutputWave Wave(int channel, bool complementary) const;
   Drive Level(int channel, bool complementary) const;
 
+  // When the counter's next update event (overflow/underflow with the repetition
+  // counter run out) happens at the present configuration, whether or not it raises
+  // an interrupt; kNever when the counter is stopped, an encoder or slave, or UDIS
+  // masks it. The world steps what the outputs drive at these times.
+  Picoseconds NextUpdate() const;
   std::uint32_t counter() const { return cnt_; }
   double kernel_hz() const;
   // The counter clock's update period (an update event every … seconds) at the present

@@ -7,8 +7,13 @@
 // reset); every register access costs `access_cycles`, interrupt entry and exit 12 each
 // (Cortex-M4 TRM, "exception entry latency"), so busy-wait loops on a ready flag end
 // as on the chip. WaitForInterrupt() jumps to the next event of any model or of the
-// world's schedule. Each access first brings every model to the present time; world
-// events (Schedule) run at their time, between accesses.
+// world's schedule. World events (Schedule) run at their time, between accesses, with
+// every model brought to it first. Between events the models are advanced lazily: an
+// access brings the block it reaches (and what that block's state depends on) to the
+// present, and every model is brought there when the earliest of their next events
+// (NextEvent) comes — the same states as advancing all of them at every access,
+// since a model catches up exact over any interval, at a fraction of the cost. The
+// world reads the models' state from its events (or after AdvanceTo).
 //
 // Interrupts: a model's interrupt line high makes its IRQ pending in the NVIC; a
 // pending, enabled IRQ is taken after the access in progress (or in WFI) when PRIMASK
@@ -163,8 +168,22 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   std::optional<Route> Decode(std::uint32_t address);
   void Sync(Picoseconds t);
   void AdvanceModels(Picoseconds t);
+  void AdvanceAll();
+  void AdvanceDue();
+  unsigned LinesOf(const Peripheral* m) const;
+  // Laziness (see AdvanceAll): the models with timed events, each one's next event, and
+  // the earliest of them, at which every model is brought to the present.
+  static constexpr std::size_t kTimedModels = 8;
+  Peripheral* Timed(std::size_t i);
+  void UpdateDeadline();
+  void Note(Peripheral* model);
+  void Bring(const Route& route);
+  void Settle(const Route& route);
+  bool OutputOnly(const Route& route) const;  // a GPIO port's ODR, BSRR or BRR
   void UpdateGates();
-  void ServiceInterrupts();
+  // Takes what the NVIC would take now; `sample`: the peripherals' lines are read
+  // again even when no access since the last reading could have moved one.
+  void ServiceInterrupts(bool sample = true);
   bool LineHigh(int irq) const;
   int CurrentPriority() const;
   void DoReset(ResetCause cause);
@@ -178,6 +197,15 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   std::uint64_t cycles_ = 0;
   unsigned __int128 cycle_remainder_ = 0;
   Picoseconds limit_ = kNever;
+  std::array<Picoseconds, kTimedModels> next_{};
+  Picoseconds deadline_ = 0;
+  // Interrupt lines (a bit each, in the order of the IRQs the chip samples) that an
+  // access or event may have moved since they were last sampled.
+  static constexpr unsigned kAllLines = 0x3Fu;
+  unsigned lines_dirty_ = kAllLines;
+  // SpendCycles' last step: n cycles at f Hz are step_ps_ ps and step_rest_ / f ps.
+  std::uint64_t step_cycles_ = 0, step_hz_ = 0, step_rest_ = 0;
+  Picoseconds step_ps_ = 0;
   Rcc rcc_;
   Pwr pwr_;
   ClockRules rules_;
