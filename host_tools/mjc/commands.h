@@ -89,6 +89,9 @@ inline Exit NoAnswer(const host::BoardClient& board) {
 // The defaults the command line starts from (main loads them before the subcommands
 // are added): the config file's, with MJC_IFACE over its interface.
 host::ToolConfig& Defaults();
+// Loads Defaults() from the config file. A file that cannot be used stops every
+// command but --help, -h and --version: false, with the reason in *why.
+bool LoadDefaults(int argc, char** argv, std::string* why);
 
 // --iface, defaulting to MJC_IFACE, the config file's, or vcan0.
 inline CLI::Option* AddIfaceOption(CLI::App* cmd, std::string* iface,

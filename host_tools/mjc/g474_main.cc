@@ -16,17 +16,6 @@
 #include "mjc/host/config.h"
 #include "mjc/plant/params.h"
 
-namespace mjc::cli {
-
-// mjc's defaults (its config file, MJC_IFACE), so that --iface and --node default as
-// mjc sim's do.
-host::ToolConfig& Defaults() {
-  static host::ToolConfig defaults;
-  return defaults;
-}
-
-}  // namespace mjc::cli
-
 namespace {
 
 using mjc::cli::Exit;
@@ -102,18 +91,10 @@ int main(int argc, char** argv) {
       "bus-off. Exit status: 0 done; 1 a model saw a rule of the manual broken, or a "
       "failure on this side (interface, files); 2 bad command line.");
   std::string why;
-  if (const auto defaults = mjc::host::LoadToolConfig(&why)) {
-    mjc::cli::Defaults() = *defaults;
-  } else {
-    bool asks_help = false;
-    for (int i = 1; i < argc; ++i) {
-      const std::string_view a = argv[i];
-      asks_help = asks_help || a == "--help" || a == "-h";
-    }
-    if (!asks_help) {
-      std::fprintf(stderr, "mjc-g474: %s\n", why.c_str());
-      return static_cast<int>(Exit::kFailure);
-    }
+  // mjc's defaults (its config file, MJC_IFACE): --iface and --node default as mjc sim's.
+  if (!mjc::cli::LoadDefaults(argc, argv, &why)) {
+    std::fprintf(stderr, "mjc-g474: %s\n", why.c_str());
+    return static_cast<int>(Exit::kFailure);
   }
   std::string iface, robot = "default", subject, flash_path;
   int node = 1;

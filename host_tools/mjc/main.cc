@@ -14,15 +14,6 @@
 #include "mjc/build_id.h"
 #include "mjc/strict_json.h"
 
-namespace mjc::cli {
-
-host::ToolConfig& Defaults() {
-  static host::ToolConfig defaults;
-  return defaults;
-}
-
-}  // namespace mjc::cli
-
 namespace {
 
 // "mjc cal download": the subcommands the command line chose.
@@ -76,16 +67,7 @@ int main(int argc, char** argv) {
   // The defaults come first: the subcommands' options start from them. A config file
   // that cannot be used stops every command but --help and --version.
   std::string why;
-  if (const auto config = mjc::host::LoadToolConfig(&why)) {
-    mjc::cli::Defaults() = *config;
-  } else {
-    bool asks_help = false;
-    for (int i = 1; i < argc; ++i) {
-      const std::string_view a = argv[i];
-      asks_help = asks_help || a == "--help" || a == "-h" || a == "--version";
-    }
-    if (!asks_help) return Fail("mjc", why, Exit::kFailure);
-  }
+  if (!mjc::cli::LoadDefaults(argc, argv, &why)) return Fail("mjc", why, Exit::kFailure);
   app.footer(mjc::cli::kExitStatusHelp);  // before the subcommands: they inherit it
   app.set_version_flag(
       "--version",
