@@ -52,6 +52,7 @@ void WindowTracker::Begin(std::uint32_t tick, Motion motion, std::uint16_t repet
   loading_ = unloading_ = positive_ = negative_ = 0;
   peak_power_ = Power{};
   peak_torque_ = Torque{};
+  fit_sums_.Clear();
 }
 
 void WindowTracker::Finish(std::uint32_t tick, WindowSummary* done) const {
@@ -68,10 +69,12 @@ void WindowTracker::Finish(std::uint32_t tick, WindowSummary* done) const {
   done->eta_percent = EtaPercent(loading_, unloading_, &done->eta_valid);
   done->peak_power = peak_power_;
   done->peak_torque = peak_torque_;
+  done->fit_sums = fit_sums_;
 }
 
 bool WindowTracker::Update(std::uint32_t tick, Segment segment, std::uint16_t repetition,
-                           Power power, Torque torque, WindowSummary* done) {
+                           Power power, Torque torque, Angle joint,
+                           AngularVelocity velocity, WindowSummary* done) {
   const bool flexion_loading = segment == Segment::kFlexionLoading;
   const bool extension_loading = segment == Segment::kExtensionLoading;
   const bool unloading =
@@ -105,6 +108,7 @@ bool WindowTracker::Update(std::uint32_t tick, Segment segment, std::uint16_t re
     (power.raw() > 0 ? positive_ : negative_) += power.raw();
     if (Abs(power) > Abs(peak_power_)) peak_power_ = power;
     if (Abs(torque) > Abs(peak_torque_)) peak_torque_ = torque;
+    fit_sums_.Add(joint, velocity, torque);
   }
   return completed;
 }

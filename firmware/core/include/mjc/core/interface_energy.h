@@ -9,6 +9,7 @@
 
 #include <cstdint>
 
+#include "mjc/core/interface_fit.h"
 #include "mjc/core/quantities.h"
 #include "mjc/core/trajectory.h"
 
@@ -65,6 +66,9 @@ struct WindowSummary {
   bool eta_valid = false;
   Power peak_power;    // the sample of largest |P|, with its sign
   Torque peak_torque;  // the sample of largest |τ|, with its sign
+  // The window's least-squares sums of τ against θ_j and θ̇_j (interface_fit.h), for
+  // the main loop's SolveInterfaceFit.
+  InterfaceFitSums fit_sums;
 };
 
 // η in percent from raw energy sums (any common unit), rounded to nearest.
@@ -78,9 +82,10 @@ class WindowTracker {
  public:
   explicit WindowTracker(std::uint32_t tick_hz) : scale_(tick_hz) {}
 
-  // One tick. Returns true and fills *done when a window has just completed.
+  // One tick of aligned samples (power, torque, joint angle and velocity of one
+  // instant). Returns true and fills *done when a window has just completed.
   bool Update(std::uint32_t tick, Segment segment, std::uint16_t repetition, Power power,
-              Torque torque, WindowSummary* done);
+              Torque torque, Angle joint, AngularVelocity velocity, WindowSummary* done);
 
   std::uint32_t dropped_windows() const { return dropped_; }
   void Clear();
@@ -103,6 +108,7 @@ class WindowTracker {
   std::int64_t negative_ = 0;
   Power peak_power_;
   Torque peak_torque_;
+  InterfaceFitSums fit_sums_;
   std::uint32_t dropped_ = 0;
 };
 

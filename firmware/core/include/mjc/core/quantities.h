@@ -18,6 +18,8 @@ using AngularVelocity = Fixed<RadianPerSecond, 20>;
 using Torque = Fixed<NewtonMeter, 24>;
 // Q7.24: ±128 N·m/rad, 6.0e-8 N·m/rad. SEA stiffness 2·k·r_j².
 using Stiffness = Fixed<NewtonMeterPerRadian, 24>;
+// Q7.24: ±128 N·m·s/rad, 6.0e-8 N·m·s/rad. Identified attachment damping b_i.
+using Damping = Fixed<NewtonMeterSecondPerRadian, 24>;
 // Q7.24: ±128 W, 6.0e-8 W. Interface power τ·θ̇_j.
 using Power = Fixed<Watt, 24>;
 // Q31.32 in int64: ±2.1e9 J, 2.3e-10 J. Energy totals read out of the accumulator.

@@ -95,6 +95,14 @@ class VelocityEstimator {
   // Reads zero until Configure() succeeded.
   AngularVelocity Update(Angle angle);
 
+  // The sample delay_ticks() old (the window's centre): the angle the last Update()'s
+  // velocity refers to. Zero until Configure() succeeded.
+  Angle centre() const {
+    if (window_ == 0) return Angle{};
+    const std::size_t i = oldest_ + window_ / 2;
+    return Angle::FromRaw(storage_[i >= window_ ? i - window_ : i]);
+  }
+
   // (N−1)/2: how many ticks the estimate lags the newest sample.
   std::uint16_t delay_ticks() const { return static_cast<std::uint16_t>(window_ / 2); }
   std::uint16_t window() const { return window_; }
