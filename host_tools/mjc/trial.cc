@@ -312,6 +312,7 @@ void AddTrial(CLI::App& app) {
     record.end.outcome = "completed";
     host::WriteRunRecord(record, dir);
     std::fputs(host::TrialTables(runs, repeatability).c_str(), stdout);
+    std::fputs(("\n" + host::AttachmentTable(runs)).c_str(), stdout);
     std::printf("windows: %s\nrun: %s\n", saved.c_str(), (dir / "run.json").c_str());
     if (sync) {
       std::printf("sync: %s: %llu window starts, %llu edges\n", sync_line->name().c_str(),

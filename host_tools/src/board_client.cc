@@ -313,8 +313,8 @@ bool BoardClient::AcceptWindowPart(int part) {
     ++incomplete_windows_;
   }
   const bool keep = !broken_;
-  last_part_ = part == 4 ? -1 : part;
-  if (part == 4) broken_ = false;
+  last_part_ = part == kLastWindowPart ? -1 : part;
+  if (part == kLastWindowPart) broken_ = false;
   return keep;
 }
 
@@ -391,7 +391,7 @@ void BoardClient::Handle(const CanFrame& f) {
       if (ok(Decode(f, &w)) && on_window_start_) on_window_start_(w);
       return;
     }
-    // A window travels as five frames (see AcceptWindowPart).
+    // A window travels as seven frames (see AcceptWindowPart).
     case Function::kWindowHeader: {
       protocol::WindowHeader h;
       if (!ok(Decode(f, &h)) || !AcceptWindowPart(0)) return;
@@ -399,6 +399,8 @@ void BoardClient::Handle(const CanFrame& f) {
       partial_.repetition = h.repetition;
       partial_.eta_valid = h.eta_valid;
       partial_.eta_percent = h.eta_percent.ToDouble();
+      partial_.fit_status = static_cast<int>(h.fit_status);
+      partial_.fit_valid = h.fit_status == InterfaceFitStatus::kOk;
       return;
     }
     case Function::kWindowEnergy: {
@@ -428,6 +430,20 @@ void BoardClient::Handle(const CanFrame& f) {
       partial_.start_tick = t.start_tick;
       partial_.peak_tick = t.start_tick + t.peak_offset;
       partial_.end_tick = t.start_tick + t.end_offset;
+      return;
+    }
+    case Function::kWindowFit: {
+      protocol::WindowFit w;
+      if (!ok(Decode(f, &w)) || !AcceptWindowPart(5)) return;
+      partial_.stiffness_Nm_rad = w.stiffness.ToDouble();
+      partial_.damping_Nms_rad = w.damping.ToDouble();
+      return;
+    }
+    case Function::kWindowFitResidual: {
+      protocol::WindowFitResidual r;
+      if (!ok(Decode(f, &r)) || !AcceptWindowPart(kLastWindowPart)) return;
+      partial_.offset_Nm = r.offset.ToDouble();
+      partial_.residual_rms_Nm = r.residual_rms.ToDouble();
       windows_.push_back(partial_);
       return;
     }

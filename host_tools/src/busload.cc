@@ -53,6 +53,8 @@ BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards,
   add(protocol::WindowWork{}, kWindowsHz);
   add(protocol::WindowPeaks{}, kWindowsHz);
   add(protocol::WindowTicks{}, kWindowsHz);
+  add(protocol::WindowFit{}, kWindowsHz);
+  add(protocol::WindowFitResidual{}, kWindowsHz);
   add(protocol::HostHeartbeat{}, kHostHeartbeatHz, " (host)");
   return load;
 }

@@ -22,10 +22,19 @@ const std::vector<std::string> kColumns = {
     "trial",    "amplitude_deg", "repetitions", "motion",       "repetition",
     "analysed", "eta_valid",     "eta_pct",     "loading_J",    "unloading_J",
     "net_J",    "positive_J",    "negative_J",  "peak_power_W", "peak_torque_Nm"};
+// Version 3 appends the attachment's fit to version 2's columns.
+const std::vector<std::string> kFitColumns = {
+    "fit_valid", "stiffness_Nm_rad", "damping_Nms_rad", "offset_Nm", "residual_rms_Nm"};
+std::vector<std::string> ColumnsV3() {
+  std::vector<std::string> c = kColumns;
+  c.insert(c.end(), kFitColumns.begin(), kFitColumns.end());
+  return c;
+}
 constexpr const char* kNote =
-    "# mjc windows.csv version 2: trial and repetition count from 1; analysed = 1 for "
-    "the middle three flexions the tables use (version 1, without this line, counted "
-    "repetitions from 0)";
+    "# mjc windows.csv version 3: trial and repetition count from 1; analysed = 1 for "
+    "the middle three flexions the tables use; the attachment's fit tau = k*theta + "
+    "b*omega + offset per window (version 2 had no fit columns; version 1, without this "
+    "line, counted repetitions from 0)";
 
 std::string Joined(const std::vector<std::string>& cells) {
   std::string out;
@@ -110,6 +119,41 @@ std::string TrialTables(const std::vector<TrialWindows>& trials, bool repeatabil
   return out;
 }
 
+std::string AttachmentTable(const std::vector<TrialWindows>& trials) {
+  std::string out =
+      "| trial | amplitude | k_i (N·m/rad) | b_i (N·m·s/rad) | τ_0 (N·m) | residual RMS "
+      "(N·m) | fits |\n|---|---|---|---|---|---|---|\n";
+  char line[200];
+  for (std::size_t t = 0; t < trials.size(); ++t) {
+    std::vector<double> k, b, offset, rms;
+    int analysed = 0;
+    for (const BoardWindow* w :
+         AnalysedFlexions(trials[t].windows, trials[t].repetitions)) {
+      ++analysed;
+      if (!w->fit_valid) continue;
+      k.push_back(w->stiffness_Nm_rad);
+      b.push_back(w->damping_Nms_rad);
+      offset.push_back(w->offset_Nm);
+      rms.push_back(w->residual_rms_Nm);
+    }
+    if (k.empty()) {
+      std::snprintf(line, sizeof line, "| %zu | %.0f° | n/a | n/a | n/a | n/a | 0/%d |\n",
+                    t + 1, trials[t].amplitude_deg, analysed);
+    } else {
+      std::snprintf(line, sizeof line,
+                    "| %zu | %.0f° | %.3f | %.4f | %.4f | %.5f | %zu/%d |\n", t + 1,
+                    trials[t].amplitude_deg, Describe(k).mean, Describe(b).mean,
+                    Describe(offset).mean, Describe(rms).mean, k.size(), analysed);
+    }
+    out += line;
+  }
+  out +=
+      "\nThe attachment's least-squares fit τ = k_i·θ_j + b_i·θ̇_j + τ_0 per window, "
+      "solved on the board; each value the mean over the analysed flexions the board "
+      "could fit (fits: how many of them).\n";
+  return out;
+}
+
 bool SameAmplitude(const std::vector<TrialWindows>& trials) {
   return std::all_of(trials.begin(), trials.end(), [&](const TrialWindows& t) {
     return t.amplitude_deg == trials.front().amplitude_deg;
@@ -118,20 +162,31 @@ bool SameAmplitude(const std::vector<TrialWindows>& trials) {
 
 void WriteWindowsCsv(const std::vector<TrialWindows>& trials,
                      const std::filesystem::path& dir) {
-  std::string text = std::string(kNote) + "\n" + Joined(kColumns) + "\n";
+  std::string text = std::string(kNote) + "\n" + Joined(ColumnsV3()) + "\n";
   for (std::size_t t = 0; t < trials.size(); ++t) {
     for (const BoardWindow& w : trials[t].windows) {
       const bool analysed =
           IsAnalysedFlexion(w.motion, w.repetition, trials[t].repetitions);
-      text += Joined({std::to_string(t + 1), CsvTable::Number(trials[t].amplitude_deg),
+      text += Joined({std::to_string(t + 1),
+                      CsvTable::Number(trials[t].amplitude_deg),
                       std::to_string(trials[t].repetitions),
                       w.motion == Motion::kFlexion ? "flexion" : "extension",
-                      std::to_string(w.repetition + 1), analysed ? "1" : "0",
-                      w.eta_valid ? "1" : "0", CsvTable::Number(w.eta_percent),
-                      CsvTable::Number(w.loading_J), CsvTable::Number(w.unloading_J),
-                      CsvTable::Number(w.net_J()), CsvTable::Number(w.positive_J),
-                      CsvTable::Number(w.negative_J), CsvTable::Number(w.peak_power_W),
-                      CsvTable::Number(w.peak_torque_Nm)}) +
+                      std::to_string(w.repetition + 1),
+                      analysed ? "1" : "0",
+                      w.eta_valid ? "1" : "0",
+                      CsvTable::Number(w.eta_percent),
+                      CsvTable::Number(w.loading_J),
+                      CsvTable::Number(w.unloading_J),
+                      CsvTable::Number(w.net_J()),
+                      CsvTable::Number(w.positive_J),
+                      CsvTable::Number(w.negative_J),
+                      CsvTable::Number(w.peak_power_W),
+                      CsvTable::Number(w.peak_torque_Nm),
+                      w.fit_valid ? "1" : "0",
+                      CsvTable::Number(w.stiffness_Nm_rad),
+                      CsvTable::Number(w.damping_Nms_rad),
+                      CsvTable::Number(w.offset_Nm),
+                      CsvTable::Number(w.residual_rms_Nm)}) +
               "\n";
     }
   }
@@ -149,18 +204,19 @@ std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::p
   std::string line;
   std::getline(in, line);
   int number = 1;
-  const bool v2 = line.starts_with("# mjc windows.csv version 2");
+  const bool v3 = line.starts_with("# mjc windows.csv version 3");
+  const bool v2 = v3 || line.starts_with("# mjc windows.csv version 2");
   if (v2) {
     std::getline(in, line);
     ++number;
   }
-  const std::vector<std::string>& columns = v2 ? kColumns : kColumnsV1;
+  const std::vector<std::string> columns = v3 ? ColumnsV3() : v2 ? kColumns : kColumnsV1;
   if (line != Joined(columns)) {
     *why = path.string() + ": the header is not '" + Joined(columns) +
            "' (written by another version of mjc trial?)";
     return std::nullopt;
   }
-  if (version != nullptr) *version = v2 ? 2 : 1;
+  if (version != nullptr) *version = v3 ? 3 : v2 ? 2 : 1;
   // Version 1's cells in version 2's places (no repetitions or analysed column).
   const std::vector<int> at =
       v2 ? std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14}
@@ -204,6 +260,15 @@ std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::p
       w.negative_J = std::stod(get(11));
       w.peak_power_W = std::stod(get(12));
       w.peak_torque_Nm = std::stod(get(13));
+      if (v3) {
+        const std::string& valid = cell[kColumns.size()];
+        if (valid != "0" && valid != "1") throw std::invalid_argument("fit_valid");
+        w.fit_valid = valid == "1";
+        w.stiffness_Nm_rad = std::stod(cell[kColumns.size() + 1]);
+        w.damping_Nms_rad = std::stod(cell[kColumns.size() + 2]);
+        w.offset_Nm = std::stod(cell[kColumns.size() + 3]);
+        w.residual_rms_Nm = std::stod(cell[kColumns.size() + 4]);
+      }
       if (v2) {
         const unsigned long reps = std::stoul(get(2));
         if (reps == 0 || reps > 255 || repetition >= reps)

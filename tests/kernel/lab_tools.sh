@@ -66,7 +66,7 @@ check "run.json: the board, its calibration, the run and its end" \
   jq -e ".node == 2 and .iface == \"vcan0\" and .board.build == \"$build\" and (.board.instance | test(\"^[0-9a-f]{4}$\")) and .board.reset_cause == \"power-on\" and .calibration.calibrated and (.calibration.c_right_deg - 1.1001 | fabs) < 1e-4 and .robot == null and .subject == \"S07\" and .protocol == \"amplitude\" and .amplitudes_deg == [15] and .frequency_hz == 2 and .repetitions == 3 and .rest_s == 0.2 and (.started_utc | test(\"^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}Z$\")) and (.host | length) > 0 and (.mjc | length) > 0 and .end.outcome == \"completed\" and .end.fault == null" \
   "${dir:-.}/run.json"
 check "windows.csv: a version note, repetitions from 1, the analysed flexions marked" \
-  sh -c "head -n 1 '${dir:-.}/windows.csv' | grep -q '^# mjc windows.csv version 2' && grep -q '^1,15,3,flexion,2,1,' '${dir:-.}/windows.csv' && grep -q '^1,15,3,extension,3,0,' '${dir:-.}/windows.csv' && ! grep -q ',flexion,0,' '${dir:-.}/windows.csv'"
+  sh -c "head -n 1 '${dir:-.}/windows.csv' | grep -q '^# mjc windows.csv version 3' && grep -q '^1,15,3,flexion,2,1,' '${dir:-.}/windows.csv' && grep -q '^1,15,3,extension,3,0,' '${dir:-.}/windows.csv' && ! grep -q ',flexion,0,' '${dir:-.}/windows.csv'"
 "$mjc" report "${dir:-.}" --no-figure >report.out 2>report.err
 status=$?
 check "mjc report reads run.json (exit $status), guessing nothing" \

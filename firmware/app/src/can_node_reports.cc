@@ -26,11 +26,14 @@ void CanNode::SendEvent(const AppEvent& e) {
       return;
     case AppEvent::Kind::kWindow: {
       const WindowSummary& w = e.window;
+      // The attachment's fit, solved here in the main loop from the tick's sums.
+      const InterfaceFit fit = SolveInterfaceFit(w.fit_sums);
       protocol::WindowHeader h;
       h.motion = w.motion;
       h.repetition = w.repetition;
       h.eta_valid = w.eta_valid;
       h.eta_percent = w.eta_percent;
+      h.fit_status = fit.status;
       Send(h);
       Send(protocol::WindowEnergy{FixedCast<WireEnergy>(w.loading),
                                   FixedCast<WireEnergy>(w.unloading)});
@@ -42,7 +45,9 @@ void CanNode::SendEvent(const AppEvent& e) {
       t.start_tick = w.start_tick;
       t.peak_offset = static_cast<std::uint16_t>(w.peak_tick - w.start_tick);
       t.end_offset = static_cast<std::uint16_t>(w.end_tick - w.start_tick);
-      return Send(t);
+      Send(t);
+      Send(protocol::WindowFit{fit.stiffness, fit.damping});
+      return Send(protocol::WindowFitResidual{fit.offset, fit.residual_rms});
     }
   }
 }

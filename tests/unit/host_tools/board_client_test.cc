@@ -22,18 +22,19 @@ namespace {
 using namespace mjc;
 using namespace mjc::host;
 
-// Window summaries through BoardClient: five frames a window, header first.
+// Window summaries through BoardClient: seven frames a window, header first.
 
 constexpr std::uint8_t kNode = 1;
 
-// Window `repetition`'s five frames as the board sends them; every value is derived
+// Window `repetition`'s seven frames as the board sends them; every value is derived
 // from the repetition, so a window mixed from two would show.
-std::array<protocol::CanFrame, 5> WindowFrames(std::uint16_t repetition) {
+std::array<protocol::CanFrame, 7> WindowFrames(std::uint16_t repetition) {
   protocol::WindowHeader h;
   h.motion = Motion::kFlexion;
   h.repetition = repetition;
   h.eta_valid = true;
   h.eta_percent = Ratio::Quantize(40.0 + repetition);
+  h.fit_status = InterfaceFitStatus::kOk;
   protocol::WindowEnergy e;
   e.loading = protocol::WireEnergy::Quantize(0.001 * repetition);
   e.unloading = protocol::WireEnergy::Quantize(-0.0005 * repetition);
@@ -47,17 +48,25 @@ std::array<protocol::CanFrame, 5> WindowFrames(std::uint16_t repetition) {
   t.start_tick = 1000u * repetition;
   t.peak_offset = 100;
   t.end_offset = 200;
-  return {protocol::Encode(h, kNode), protocol::Encode(e, kNode),
-          protocol::Encode(w, kNode), protocol::Encode(p, kNode),
-          protocol::Encode(t, kNode)};
+  protocol::WindowFit fit;
+  fit.stiffness = Stiffness::Quantize(4.0 + 0.1 * repetition);
+  fit.damping = Damping::Quantize(0.2 + 0.01 * repetition);
+  protocol::WindowFitResidual residual;
+  residual.offset = Torque::Quantize(0.001 * repetition);
+  residual.residual_rms = Torque::Quantize(0.0001 * repetition);
+  return {protocol::Encode(h, kNode),       protocol::Encode(e, kNode),
+          protocol::Encode(w, kNode),       protocol::Encode(p, kNode),
+          protocol::Encode(t, kNode),       protocol::Encode(fit, kNode),
+          protocol::Encode(residual, kNode)};
 }
 
 class WindowAssembly : public ::testing::Test {
  protected:
-  // Sends window `repetition` without the parts listed in `lost` (0 header … 4 ticks).
+  // Sends window `repetition` without the parts listed in `lost` (0 header … 4 ticks,
+  // 5 fit, 6 residual).
   void SendWindow(std::uint16_t repetition, std::initializer_list<int> lost = {}) {
     const auto frames = WindowFrames(repetition);
-    for (int part = 0; part < 5; ++part) {
+    for (int part = 0; part < 7; ++part) {
       if (std::find(lost.begin(), lost.end(), part) != lost.end()) continue;
       ASSERT_TRUE(board_->Send(frames[static_cast<std::size_t>(part)], &why_));
     }
@@ -92,6 +101,11 @@ TEST_F(WindowAssembly, CompleteWindowsArriveWhole) {
   EXPECT_EQ(w.start_tick, 2000u);
   EXPECT_EQ(w.peak_tick, 2100u);
   EXPECT_EQ(w.end_tick, 2200u);
+  EXPECT_TRUE(w.fit_valid);
+  EXPECT_NEAR(w.stiffness_Nm_rad, 4.2, 1e-6);
+  EXPECT_NEAR(w.damping_Nms_rad, 0.22, 1e-6);
+  EXPECT_NEAR(w.offset_Nm, 0.002, 1e-6);
+  EXPECT_NEAR(w.residual_rms_Nm, 0.0002, 1e-6);
   EXPECT_EQ(client_.incomplete_windows(), 0u);
 }
 
@@ -110,7 +124,7 @@ TEST_F(WindowAssembly, LostHeaderDropsTheWindowAndCountsIt) {
 
 TEST_F(WindowAssembly, LostMiddleOrLastPartDropsTheWindow) {
   SendWindow(1, {2});  // no WindowWork
-  SendWindow(2, {4});  // no WindowTicks: the next header ends it
+  SendWindow(2, {6});  // no WindowFitResidual: the next header ends it
   SendWindow(3);
   const auto windows = Received();
   ASSERT_EQ(windows.size(), 1u);
@@ -136,6 +150,19 @@ TEST_F(WindowAssembly, MalformedPartCountsAsLost) {
   frames[1].length = 7;  // WindowEnergy is 8 bytes
   for (const auto& f : frames) ASSERT_TRUE(board_->Send(f, &why_));
   EXPECT_TRUE(Received().empty());
+  EXPECT_EQ(client_.malformed(), 1u);
+  EXPECT_EQ(client_.incomplete_windows(), 1u);
+}
+
+TEST_F(WindowAssembly, UnknownFitStatusIsRefusedAndCounted) {
+  auto frames = WindowFrames(1);
+  frames[0].data[3] =
+      static_cast<std::uint8_t>(frames[0].data[3] | (9 << 1));  // no status 9
+  for (const auto& f : frames) ASSERT_TRUE(board_->Send(f, &why_));
+  SendWindow(2);
+  const auto windows = Received();
+  ASSERT_EQ(windows.size(), 1u);
+  EXPECT_EQ(windows[0].repetition, 2);
   EXPECT_EQ(client_.malformed(), 1u);
   EXPECT_EQ(client_.incomplete_windows(), 1u);
 }

@@ -96,7 +96,7 @@ TEST_F(WindowsCsv, CountsFromOneAndSaysSoAndWhatIsAnalysed) {
   text << std::ifstream(dir_ / "windows.csv").rdbuf();
   const std::string csv = text.str();
   EXPECT_EQ(
-      csv.rfind("# mjc windows.csv version 2: trial and repetition count from 1", 0), 0u)
+      csv.rfind("# mjc windows.csv version 3: trial and repetition count from 1", 0), 0u)
       << csv;
   // Repetition 0 (the board's count) is the first, outside the middle three; 2 is the
   // third, analysed.
@@ -106,9 +106,34 @@ TEST_F(WindowsCsv, CountsFromOneAndSaysSoAndWhatIsAnalysed) {
   std::string why;
   const auto read = ReadWindowsCsv(dir_, &why, &version);
   ASSERT_TRUE(read) << why;
-  EXPECT_EQ(version, 2);
+  EXPECT_EQ(version, 3);
   EXPECT_EQ((*read)[0].windows[0].repetition, 0);
   EXPECT_EQ((*read)[0].windows[1].repetition, 2);
+}
+
+TEST_F(WindowsCsv, CarriesTheAttachmentFit) {
+  BoardWindow w = Flexion(2, 45, true);
+  w.fit_valid = true;
+  w.stiffness_Nm_rad = 4.52;
+  w.damping_Nms_rad = 0.251;
+  w.offset_Nm = 0.0121;
+  w.residual_rms_Nm = 0.0007;
+  WriteWindowsCsv({{25.0, 5, {Flexion(1, 40, true), w}}}, dir_);
+  std::string why;
+  const auto read = ReadWindowsCsv(dir_, &why);
+  ASSERT_TRUE(read) << why;
+  const BoardWindow& back = (*read)[0].windows[1];
+  EXPECT_TRUE(back.fit_valid);
+  EXPECT_FALSE((*read)[0].windows[0].fit_valid);
+  EXPECT_DOUBLE_EQ(back.stiffness_Nm_rad, 4.52);
+  EXPECT_DOUBLE_EQ(back.damping_Nms_rad, 0.251);
+  EXPECT_DOUBLE_EQ(back.offset_Nm, 0.0121);
+  EXPECT_DOUBLE_EQ(back.residual_rms_Nm, 0.0007);
+  // Repetitions 1 and 2 are analysed (the middle three of five); only 2 has a fit.
+  const std::string table = AttachmentTable(*read);
+  EXPECT_NE(table.find("| 1 | 25° | 4.520 | 0.2510 | 0.0121 | 0.00070 | 1/2 |"),
+            std::string::npos)
+      << table;
 }
 
 TEST_F(WindowsCsv, AVersionOneFileIsReadCountingFromZero) {

@@ -28,6 +28,11 @@ struct BoardWindow {
   double loading_J = 0, unloading_J = 0, positive_J = 0, negative_J = 0;
   double peak_power_W = 0, peak_torque_Nm = 0;
   std::uint32_t start_tick = 0, peak_tick = 0, end_tick = 0;
+  // The attachment's least-squares fit τ = k·θ_j + b·θ̇_j + τ_0 over the window
+  // (WindowFit, WindowFitResidual); the values mean nothing unless fit_valid.
+  bool fit_valid = false;
+  int fit_status = 0;  // InterfaceFitStatus
+  double stiffness_Nm_rad = 0, damping_Nms_rad = 0, offset_Nm = 0, residual_rms_Nm = 0;
   double net_J() const { return loading_J + unloading_J; }
 };
 
@@ -288,6 +293,9 @@ class BoardClient {
 
  private:
   void Handle(const protocol::CanFrame& frame);
+  // A window's frames in the board's order: header 0, energy 1, work 2, peaks 3,
+  // ticks 4, fit 5, residual 6 (the last, which completes it).
+  static constexpr int kLastWindowPart = 6;
   bool AcceptWindowPart(int part);
   // Sends the heartbeat when it is due; false when the link failed.
   bool Beat(std::string* why);

@@ -22,18 +22,22 @@ struct TrialWindows {
 // work figures but not in η's; a closing line says how many were left out.
 std::string TrialTables(const std::vector<TrialWindows>& trials, bool repeatability);
 
+// Markdown: the attachment's fit (k_i, b_i, τ_0, residual RMS) per trial, the mean over
+// its analysed flexions whose fit the board could solve.
+std::string AttachmentTable(const std::vector<TrialWindows>& trials);
+
 // True when every trial ran at the same amplitude (a repeatability run, or an amplitude
 // run of one amplitude).
 bool SameAmplitude(const std::vector<TrialWindows>& trials);
 
-// Writes windows.csv (every window) into `dir`, version 2: a note line, the header,
-// then a row a window with its trial and repetition counted from 1 and whether the
-// tables analyse it; throws std::runtime_error naming the file when it cannot be
-// written.
+// Writes windows.csv (every window) into `dir`, version 3: a note line, the header,
+// then a row a window with its trial and repetition counted from 1, whether the
+// tables analyse it, and the attachment's fit; throws std::runtime_error naming the file
+// when it cannot be written.
 void WriteWindowsCsv(const std::vector<TrialWindows>& trials,
                      const std::filesystem::path& dir);
 
-// Reads a windows.csv back, of either version (*version, when given, says which): the
+// Reads a windows.csv back, of any version (*version, when given, says which): the
 // windows' repetitions counted from 0 again, as the board counts them. A version 1
 // file's trials take their largest repetition + 1 as their repetitions. nullopt with
 // the reason when it is missing or malformed.

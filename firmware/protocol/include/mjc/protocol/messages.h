@@ -48,6 +48,9 @@ constexpr bool ValidEnumValue(Fault f) {
   return false;
 }
 constexpr bool ValidEnumValue(Segment s) { return static_cast<std::uint8_t>(s) <= 7; }
+constexpr bool ValidEnumValue(InterfaceFitStatus s) {
+  return static_cast<std::uint8_t>(s) <= 4;
+}
 constexpr bool ValidEnumValue(Motion m) {
   return m == Motion::kFlexion || m == Motion::kExtension;
 }
@@ -74,6 +77,8 @@ enum class Function : std::uint8_t {
   kWindowWork = 0x0A,
   kWindowPeaks = 0x0B,
   kWindowTicks = 0x0C,
+  kWindowFit = 0x0D,
+  kWindowFitResidual = 0x0E,
   kParamWrite = 0x10,
   kParamRead = 0x11,
   kParamValue = 0x12,
@@ -195,6 +200,8 @@ struct WindowHeader {
   std::uint16_t repetition = 0;
   bool eta_valid = false;
   Ratio eta_percent;
+  // The window's attachment fit (WindowFit, WindowFitResidual): kOk or why not.
+  InterfaceFitStatus fit_status = InterfaceFitStatus::kTooFewSamples;
 };
 struct WindowEnergy {
   WireEnergy loading;
@@ -217,6 +224,17 @@ struct WindowTicks {
   std::uint32_t start_tick = 0;
   std::uint16_t peak_offset = 0;  // ticks from start
   std::uint16_t end_offset = 0;   // ticks from start
+};
+// The attachment's fit over the window (interface_fit.h), after WindowTicks: the
+// window's last two frames. Zero values unless status is kOk.
+struct WindowFit {
+  Stiffness stiffness;  // k_i
+  Damping damping;      // b_i
+};
+// Whether the fit has values travels in the WindowHeader (fit_status).
+struct WindowFitResidual {
+  Torque offset;        // τ_0
+  Torque residual_rms;  // √(mean (τ − fit)²)
 };
 struct ParamWrite {
   ParamId id = ParamId::kHeartbeatHz;
@@ -430,6 +448,7 @@ MJC_MESSAGE(WindowHeader, kWindowHeader, 8, kBoard,
             MakeSignal("motion", &T::motion, 0, 8),
             MakeSignal("repetition", &T::repetition, 8, 16),
             MakeSignal("eta_valid", &T::eta_valid, 24, 1),
+            MakeSignal("fit_status", &T::fit_status, 25, 7),
             MakeSignal("eta_pct", &T::eta_percent, 32, 32, "%"));
 MJC_MESSAGE(WindowEnergy, kWindowEnergy, 8, kBoard,
             MakeSignal("loading_J", &T::loading, 0, 32, "J"),
@@ -444,6 +463,12 @@ MJC_MESSAGE(WindowTicks, kWindowTicks, 8, kBoard,
             MakeSignal("start_tick", &T::start_tick, 0, 32, "tick"),
             MakeSignal("peak_offset", &T::peak_offset, 32, 16, "tick"),
             MakeSignal("end_offset", &T::end_offset, 48, 16, "tick"));
+MJC_MESSAGE(WindowFit, kWindowFit, 8, kBoard,
+            MakeSignal("stiffness_Nm_rad", &T::stiffness, 0, 32, "N.m/rad"),
+            MakeSignal("damping_Nms_rad", &T::damping, 32, 32, "N.m.s/rad"));
+MJC_MESSAGE(WindowFitResidual, kWindowFitResidual, 8, kBoard,
+            MakeSignal("offset_Nm", &T::offset, 0, 32, "N.m"),
+            MakeSignal("residual_rms_Nm", &T::residual_rms, 32, 32, "N.m"));
 MJC_MESSAGE(ParamWrite, kParamWrite, 6, kHost, MakeSignal("param", &T::id, 0, 16),
             MakeSignal("value", &T::value, 16, 32));
 MJC_MESSAGE(ParamRead, kParamRead, 2, kHost, MakeSignal("param", &T::id, 0, 16));
@@ -499,10 +524,10 @@ MJC_MESSAGE(BootResult, kBootResult, 8, kBoard, MakeSignal("request", &T::reques
 using AllMessages =
     std::tuple<StopAll, FaultEvent, Command, Setpoint, CommandResult, TrialConfig,
                SweepConfig, WindowStart, WindowHeader, WindowEnergy, WindowWork,
-               WindowPeaks, WindowTicks, ParamWrite, ParamRead, ParamValue,
-               TelemetryAngles, TelemetryTorque, TelemetryPower, TelemetryEnergy,
-               TelemetryControl, Heartbeat, BoardInfo, HostHeartbeat, BootStatus,
-               BootHold, BootCommand, BootResult>;
+               WindowPeaks, WindowTicks, WindowFit, WindowFitResidual, ParamWrite,
+               ParamRead, ParamValue, TelemetryAngles, TelemetryTorque, TelemetryPower,
+               TelemetryEnergy, TelemetryControl, Heartbeat, BoardInfo, HostHeartbeat,
+               BootStatus, BootHold, BootCommand, BootResult>;
 
 namespace detail {
 template <class... M>
