@@ -303,6 +303,53 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
   rmse.Write(out_ / "rmse.csv");
   json_["amplitude_sweep"] = subjects;
 
+  // The attachment identified on the board, per subject and amplitude, beside the
+  // plant's values (for a standard linear solid, its effective k and b at the drive
+  // frequency).
+  Print(
+      "\n## The attachment identified on the board: τ = k_i·θ_j + b_i·θ̇_j + τ_0, mean ± "
+      "SE of the analysed flexions\n\n| subject | amplitude | k_i board (N·m/rad) | k "
+      "truth | k error | b_i board (N·m·s/rad) | b truth | b error |\n"
+      "|---|---|---|---|---|---|---|---|\n");
+  CsvTable fit({"subject", "amplitude_deg", "stiffness_Nm_rad", "stiffness_se",
+                "truth_stiffness_Nm_rad", "damping_Nms_rad", "damping_se",
+                "truth_damping_Nms_rad", "fits"});
+  nlohmann::json fits = nlohmann::json::array();
+  for (const auto& s : sweeps) {
+    for (const auto& p : s.points) {
+      const auto error = [](double board, double truth) {
+        return truth != 0 ? Format("%+.1f%%", 100.0 * (board - truth) / truth)
+                          : Format("%+.4f", board);
+      };
+      if (p.stiffness.n == 0) {
+        Print("| " + s.subject + " | " + Format("%.0f°", p.amplitude_deg) +
+              " | no fit | " + Format("%.3f", s.truth.stiffness) + " | | no fit | " +
+              Format("%.4f", s.truth.damping) + " | |\n");
+      } else {
+        Print("| " + s.subject + " | " + Format("%.0f°", p.amplitude_deg) + " | " +
+              PlusMinus(p.stiffness, 1.0, "%.3f", true) + " | " +
+              Format("%.3f", s.truth.stiffness) + " | " +
+              error(p.stiffness.mean, s.truth.stiffness) + " | " +
+              PlusMinus(p.damping, 1.0, "%.4f", true) + " | " +
+              Format("%.4f", s.truth.damping) + " | " +
+              error(p.damping.mean, s.truth.damping) + " |\n");
+      }
+      fit.AddRow({s.subject, CsvTable::Number(p.amplitude_deg),
+                  CsvTable::Number(p.stiffness.mean), CsvTable::Number(p.stiffness.se),
+                  CsvTable::Number(s.truth.stiffness), CsvTable::Number(p.damping.mean),
+                  CsvTable::Number(p.damping.se), CsvTable::Number(s.truth.damping),
+                  std::to_string(p.stiffness.n)});
+      fits.push_back({{"subject", s.subject},
+                      {"amplitude_deg", p.amplitude_deg},
+                      {"stiffness_Nm_rad", StatsJson(p.stiffness)},
+                      {"damping_Nms_rad", StatsJson(p.damping)},
+                      {"truth_stiffness_Nm_rad", s.truth.stiffness},
+                      {"truth_damping_Nms_rad", s.truth.damping}});
+    }
+  }
+  fit.Write(out_ / "attachment_fit.csv");
+  json_["attachment_fit"] = fits;
+
   // Fidelity over the whole sweep.
   double worst_power = 0, worst_energy = 0, worst_eta = 0;
   for (const auto& s : sweeps) {
@@ -374,13 +421,8 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
                              std::to_string(config.velocity_window) + ")");
   }
   report.Progress("calibration sweep on the robot alone", 0.0);
-  RampedSineConfig sweep;
-  sweep.start_amplitude = Angle{};
-  sweep.end_amplitude = Angle::Quantize(30.0 * std::numbers::pi / 180.0);
-  sweep.frequency = Frequency::FromDouble(0.5);
-  sweep.repetitions = 10;
-  sweep.rest_ms = 500;
-  const sim::CalibrationOutcome cal = sim::RunCalibration(board, sweep);
+  const sim::CalibrationOutcome cal =
+      sim::RunCalibration(board, sim::PaperCalibrationSweep());
   report.Calibration(cal);
   if (!cal.uploaded) {
     std::fprintf(stderr, "mjc-paper: calibration failed: %s\n", cal.message.c_str());
@@ -441,6 +483,7 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
       for (const double a : amplitudes)
         points.push_back(sim::SummarisePoint(a, trials[next++]));
       sweeps.push_back(sim::SummariseSweep(subject.name, std::move(points)));
+      sweeps.back().truth = sim::TrueInterface(subject.interface, sim::kPaperFrequencyHz);
     }
     report.Amplitude(sweeps);
   }

@@ -10,6 +10,10 @@
 //   eta_lossless_truth_pt    worst |η_truth| there: windows cut at the commanded phase
 //                            leave a little elastic energy between their ends at small
 //                            amplitudes (the joint trails the command through the slack)
+//   interface_k_err_pct      worst analysed flexion at ≥ 11° of the three subjects:
+//                            |k_i − k| / k of the board's attachment fit
+//                            (interface_fit.h)
+//   interface_b_err_pct      the same for b_i against b
 //   calib_err_deg            max |ĉ − c| of c_r, c_l
 //   calib_fit_ms             the fit's wall time
 //   sim_realtime_factor      simulated seconds per wall second, one joint, one core
@@ -25,23 +29,18 @@
 int main() {
   using namespace mjc;
   using namespace mjc::sim;
-  constexpr double kDeg = std::numbers::pi / 180.0;
   plant::PlantParams robot = plant::LoadPlantParams("default");
   robot.integration.max_step_s = 100e-6;  // mjc-paper's substep: one a tick
 
   const auto start = std::chrono::steady_clock::now();
   SimBoard board(robot, app::DefaultJointConfig());
-  RampedSineConfig sweep;
-  sweep.end_amplitude = Angle::Quantize(30.0 * kDeg);
-  sweep.frequency = Frequency::FromDouble(0.5);
-  sweep.repetitions = 10;
-  sweep.rest_ms = 500;
-  const CalibrationOutcome cal = RunCalibration(board, sweep);
+  const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep());
   if (!cal.uploaded) {
     std::fprintf(stderr, "sim_fidelity: calibration failed: %s\n", cal.message.c_str());
     return 1;
   }
-  double power = 0, power25 = 0, energy = 0, eta = 0;
+  double power = 0, power25 = 0, energy = 0, eta = 0, k_err = 0, b_err = 0;
+  int fits = 0, unfitted = 0;
   for (const char* name : {"subject1", "subject2", "subject3"}) {
     const SubjectSweep s = RunAmplitudeSweep(board, plant::LoadPlantParams(name),
                                              {6, 8, 11, 15, 20, 25}, nullptr, 0, 1);
@@ -53,6 +52,14 @@ int main() {
                                   std::fabs(w.unload - w.truth_unload));
         energy = std::max(energy, 100.0 * e / std::fabs(w.truth_load));
         eta = std::max(eta, std::fabs(w.eta - w.truth_eta));
+        if (p.amplitude_deg < 11) continue;
+        if (!w.fit_valid) {
+          ++unfitted;
+          continue;
+        }
+        ++fits;
+        k_err = std::max(k_err, 100.0 * std::fabs(w.stiffness / s.truth.stiffness - 1));
+        b_err = std::max(b_err, 100.0 * std::fabs(w.damping / s.truth.damping - 1));
       }
     }
   }
@@ -75,6 +82,15 @@ int main() {
   std::printf("eta_err_pt: %.2f points\n", eta);
   std::printf("eta_lossless_pt: %.2f points\n", eta_lossless);
   std::printf("eta_lossless_truth_pt: %.2f points\n", eta_lossless_truth);
+  if (fits == 0 || unfitted > 0) {
+    std::fprintf(stderr, "sim_fidelity: %d analysed flexion(s) at >= 11 deg had no fit\n",
+                 unfitted);
+    return 1;
+  }
+  std::printf("interface_k_err_pct: %.2f %% (worst of %d flexions at >= 11 deg)\n", k_err,
+              fits);
+  std::printf("interface_b_err_pct: %.2f %% (worst of %d flexions at >= 11 deg)\n", b_err,
+              fits);
   std::printf("calib_err_deg: %.4f deg\n",
               std::max(std::fabs(cal.error_right_deg), std::fabs(cal.error_left_deg)));
   std::printf("calib_fit_ms: %.1f ms\n", cal.fit.elapsed_ms);

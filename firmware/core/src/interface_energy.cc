@@ -3,14 +3,7 @@
 namespace mjc {
 namespace {
 
-int BitLength(std::uint64_t v) {
-  int n = 0;
-  while (v != 0) {
-    v >>= 1;
-    ++n;
-  }
-  return n;
-}
+using fixed_detail::BitLength;
 
 std::int64_t Magnitude(std::int64_t v) { return v < 0 ? -v : v; }
 

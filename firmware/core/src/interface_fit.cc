@@ -8,14 +8,7 @@ namespace {
 using Matrix2 = Eigen::Matrix<std::int64_t, 2, 2>;
 using Vector2 = Eigen::Matrix<std::int64_t, 2, 1>;
 
-int BitLength(std::uint64_t v) {
-  int n = 0;
-  while (v != 0) {
-    v >>= 1;
-    ++n;
-  }
-  return n;
-}
+using fixed_detail::BitLength;
 
 std::uint64_t Magnitude(std::int64_t v) {
   return v < 0 ? 0 - static_cast<std::uint64_t>(v) : static_cast<std::uint64_t>(v);

@@ -46,9 +46,19 @@ double EtaPercent(double load, double unload) {
 SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions) {
   SineConfig s;
   s.amplitude = Angle::Quantize(amplitude_deg * std::numbers::pi / 180.0);
-  s.frequency = Frequency::FromDouble(0.5);
+  s.frequency = Frequency::FromDouble(kPaperFrequencyHz);
   s.repetitions = repetitions;
   s.rest_ms = 1500;  // back to back: the paper's 3 s between amplitudes
+  return s;
+}
+
+RampedSineConfig PaperCalibrationSweep() {
+  RampedSineConfig s;
+  s.start_amplitude = Angle{};
+  s.end_amplitude = Angle::Quantize(30.0 * std::numbers::pi / 180.0);
+  s.frequency = Frequency::FromDouble(kPaperFrequencyHz);
+  s.repetitions = 10;
+  s.rest_ms = 500;
   return s;
 }
 
@@ -110,7 +120,22 @@ CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep
   return out;
 }
 
-TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) {
+InterfaceTruth TrueInterface(const plant::InterfaceParams& interface,
+                             double frequency_hz) {
+  if (!interface.present) return {};
+  if (interface.model == plant::InterfaceModel::kKelvinVoigt) {
+    return {interface.stiffness_Nm_per_rad, interface.damping_Nm_s_per_rad};
+  }
+  const double k2 = interface.maxwell_stiffness_Nm_per_rad;
+  if (k2 <= 0) return {interface.stiffness_Nm_per_rad, 0.0};
+  const double x =
+      2 * std::numbers::pi * frequency_hz * interface.damping_Nm_s_per_rad / k2;
+  return {interface.stiffness_Nm_per_rad + k2 * x * x / (1 + x * x),
+          interface.damping_Nm_s_per_rad / (1 + x * x)};
+}
+
+TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace,
+                      bool keep_samples) {
   TrialOutcome out;
   app::JointApp& app = board.app();
   const app::CommandOutcome o = app.StartTrial(sine);
@@ -138,6 +163,7 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
     WindowSummary w;
   };
   std::vector<BoardWindow> windows;
+  std::vector<Angle> joints;  // the telemetry's θ_j by tick from `base`
   host::MotionEnd trial_end(app::BoardState::kRunning);
   std::uint32_t flush = 0;
   const std::uint64_t limit = static_cast<std::uint64_t>(board.tick_hz()) * 600;
@@ -159,6 +185,14 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
                            r.telemetry.joint.ToDouble(), r.telemetry.torque.ToDouble(),
                            r.telemetry.power.ToDouble(), power_W});
     }
+    if (keep_samples && r.telemetry.tick >= base + delay) {
+      // θ_j of the aligned instant is the telemetry's joint `delay` ticks back.
+      const std::size_t at = r.telemetry.tick - delay - base;
+      out.samples.resize(at + 1);
+      out.samples[at].velocity = r.telemetry.joint_velocity;
+      out.samples[at].torque = r.telemetry.aligned_torque;
+    }
+    if (keep_samples) joints.push_back(r.telemetry.joint);
     while (app.PopEvent(&event)) {
       if (event.kind == app::AppEvent::Kind::kWindow) windows.push_back({event.window});
       if (event.kind == app::AppEvent::Kind::kFault) {
@@ -170,6 +204,9 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
     if (trial_end.Over(app.state()) && ++flush > FlushTicks(board)) break;
   }
   out.ticks = static_cast<std::uint32_t>(truth_power.size());
+  for (std::size_t i = 0; i < out.samples.size() && i < joints.size(); ++i) {
+    out.samples[i].joint = joints[i];
+  }
 
   // Windows against truth over the same ticks; power error over the cycles.
   std::size_t first = truth_power.size(), last = 0;
@@ -193,6 +230,14 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace) 
     wo.profile = Resample(board_power, s, e);
     wo.truth_profile = Resample(truth_power, s, e);
     wo.peak_fraction = static_cast<double>(p - s) / static_cast<double>(e - s);
+    const InterfaceFit fit = SolveInterfaceFit(w.fit_sums);
+    wo.fit_valid = fit.valid();
+    wo.stiffness = fit.stiffness.ToDouble();
+    wo.damping = fit.damping.ToDouble();
+    wo.offset = fit.offset.ToDouble();
+    wo.residual_rms = fit.residual_rms.ToDouble();
+    wo.first_sample = s;
+    wo.end_sample = e;
     out.windows.push_back(std::move(wo));
     first = std::min(first, s);
     last = std::max(last, e);
@@ -252,7 +297,7 @@ RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams&
 AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& t) {
   AmplitudePoint pt;
   pt.amplitude_deg = amplitude_deg;
-  std::vector<double> l, u, n, e, tl, tu, tn, te;
+  std::vector<double> l, u, n, e, tl, tu, tn, te, k, b;
   for (const WindowOutcome* w : host::AnalysedFlexions(t.windows, 5)) {
     l.push_back(w->load);
     u.push_back(w->unload);
@@ -262,6 +307,10 @@ AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& t) {
     tu.push_back(w->truth_unload);
     tn.push_back(w->truth_net);
     te.push_back(w->truth_eta);
+    if (w->fit_valid) {
+      k.push_back(w->stiffness);
+      b.push_back(w->damping);
+    }
     pt.flexions.push_back(*w);
   }
   pt.load = host::Describe(l);
@@ -272,6 +321,8 @@ AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& t) {
   pt.truth_unload = host::Describe(tu);
   pt.truth_net = host::Describe(tn);
   pt.truth_eta = host::Describe(te);
+  pt.stiffness = host::Describe(k);
+  pt.damping = host::Describe(b);
   pt.power_rmse_pct_peak =
       t.truth_peak_power_W > 0 ? 100.0 * t.power_rmse_W / t.truth_peak_power_W : 0.0;
   return pt;
@@ -319,7 +370,9 @@ SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subjec
     }
     points.push_back(SummarisePoint(a, RunTrial(board, PaperSine(a), false)));
   }
-  return SummariseSweep(subject.name, std::move(points));
+  SubjectSweep out = SummariseSweep(subject.name, std::move(points));
+  out.truth = TrueInterface(subject.interface, kPaperFrequencyHz);
+  return out;
 }
 
 std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,

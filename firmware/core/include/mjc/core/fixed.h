@@ -29,6 +29,13 @@ namespace mjc {
 
 namespace fixed_detail {
 
+// The number of significant bits of v (0 for 0).
+constexpr int BitLength(std::uint64_t v) {
+  int n = 0;
+  for (; v != 0; v >>= 1) ++n;
+  return n;
+}
+
 template <class Rep>
 inline constexpr int kBits = std::numeric_limits<Rep>::digits + 1;
 

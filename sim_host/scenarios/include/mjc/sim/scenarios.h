@@ -52,6 +52,21 @@ struct WindowOutcome {
   std::vector<double> profile;
   std::vector<double> truth_profile;
   double peak_fraction = 0;  // where the commanded peak falls in the window, [0, 1]
+  // The board's fit of the attachment (interface_fit.h), solved from the window's sums
+  // as the main loop does.
+  bool fit_valid = false;
+  double stiffness = 0, damping = 0, offset = 0,
+         residual_rms = 0;  // N·m/rad, N·m·s/rad, N·m
+  // The window's aligned ticks as indices into TrialOutcome::samples: [first, end).
+  std::size_t first_sample = 0, end_sample = 0;
+};
+
+// One tick's aligned signals as the board's window tracker sees them: θ_j, θ̇_j and τ
+// of the instant delay_ticks() back.
+struct AlignedSample {
+  Angle joint;
+  AngularVelocity velocity;
+  Torque torque;
 };
 
 struct TraceRow {
@@ -61,6 +76,8 @@ struct TraceRow {
 struct TrialOutcome {
   std::vector<WindowOutcome> windows;  // every completed window, in order
   std::vector<TraceRow> trace;         // every 20th tick (500 Hz), when requested
+  std::vector<AlignedSample> samples;  // every aligned tick from the trial's first, when
+                                       // requested
   double power_rmse_W = 0;             // board vs truth power, aligned, over the cycles
   double truth_peak_power_W = 0;       // max |truth power| over the cycles
   std::uint32_t ticks = 0;
@@ -71,9 +88,28 @@ struct TrialOutcome {
 inline constexpr int kProfilePoints = 100;
 
 // One sine trial to completion on a calibrated, idle board.
-TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace);
+TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace,
+                      bool keep_samples = false);
+
+// The attachment's true stiffness and damping as a linear fit over a sinusoid of
+// `frequency_hz` sees them: Kelvin–Voigt k and b; for the standard linear solid
+// (k ∥ (k_2 in series with b)), the real part of its complex stiffness and the
+// imaginary part over ω, with λ = b/k_2:
+//   k_eff = k + k_2·(ωλ)²/(1 + (ωλ)²),   b_eff = b/(1 + (ωλ)²).
+// The hand's side of the interface only: the joint's bearings (b_j) and inertia (J_j)
+// also load the SEA and are not in these values.
+struct InterfaceTruth {
+  double stiffness = 0;  // N·m/rad
+  double damping = 0;    // N·m·s/rad
+};
+InterfaceTruth TrueInterface(const plant::InterfaceParams& interface,
+                             double frequency_hz);
+// The drive frequency of PaperSine, Hz.
+inline constexpr double kPaperFrequencyHz = 0.5;
 
 SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions = 5);
+// The paper's calibration sweep on the robot alone: 0 → 30°, 0.5 Hz, ten cycles.
+RampedSineConfig PaperCalibrationSweep();
 
 struct RepeatabilityOutcome {
   std::vector<TrialOutcome> trials;
@@ -95,6 +131,8 @@ struct AmplitudePoint {
   host::Stats load, unload, net, eta;                          // board
   host::Stats truth_load, truth_unload, truth_net, truth_eta;  // truth
   double power_rmse_pct_peak = 0;
+  // The board's attachment fit over the analysed flexions it could fit.
+  host::Stats stiffness, damping;
   std::vector<WindowOutcome> flexions;  // the analysed ones
 };
 
@@ -104,6 +142,7 @@ struct SubjectSweep {
   // RMSE board vs truth across amplitudes (J), and normalised to the truth's range (%).
   double rmse_load = 0, rmse_unload = 0, rmse_net = 0;
   double nrmse_load = 0, nrmse_unload = 0, nrmse_net = 0;
+  InterfaceTruth truth;  // the subject's attachment (TrueInterface at kPaperFrequencyHz)
 };
 
 // The amplitude sweep for one subject: each amplitude a five-repetition trial.
