@@ -27,7 +27,13 @@ void CanNode::SendEvent(const AppEvent& e) {
     case AppEvent::Kind::kWindow: {
       const WindowSummary& w = e.window;
       // The attachment's fit, solved here in the main loop from the tick's sums.
-      const InterfaceFit fit = SolveInterfaceFit(w.fit_sums);
+      InterfaceFitSums sums;
+      InterfaceFit fit;
+      if (app_->PopWindowFit(w.start_tick, &sums)) {
+        fit = SolveInterfaceFit(sums);
+      } else {
+        fit.status = InterfaceFitStatus::kNotDelivered;
+      }
       protocol::WindowHeader h;
       h.motion = w.motion;
       h.repetition = w.repetition;

@@ -148,6 +148,17 @@ void JointApp::ISR_Done(RequestTag tag, CommandOutcome outcome) {
   events_.Push(e);
 }
 
+bool JointApp::PopWindowFit(std::uint32_t start_tick, InterfaceFitSums* out) {
+  WindowFitSums w;
+  while (window_fits_.Pop(&w)) {
+    if (w.start_tick == start_tick) {
+      *out = w.sums;
+      return true;
+    }
+  }
+  return false;
+}
+
 JointApp::Snapshot JointApp::Latest() const {
   return done_.Read([this] {
     Snapshot s;
@@ -258,6 +269,7 @@ void JointApp::ISR_AfterStep() {
     ISR_Enter(BoardState::kFault);
   }
   if (result_.window_completed) {
+    window_fits_.Push({result_.window.start_tick, result_.window_fit});
     AppEvent e;
     e.kind = AppEvent::Kind::kWindow;
     e.tick = result_.telemetry.tick;

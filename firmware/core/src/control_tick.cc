@@ -178,7 +178,7 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   const std::uint32_t aligned_tick = tick_ - estimator_.delay_ticks();
   r.window_completed = windows_.Update(
       aligned_tick, UnpackSegment(segment_word), UnpackRepetition(segment_word), power,
-      aligned_torque, estimator_.centre(), velocity, &r.window);
+      aligned_torque, estimator_.centre(), velocity, &r.window, &r.window_fit);
 
   const Angle setpoint =
       config_.backlash_compensation ? inverse_.Command(point.position) : point.position;

@@ -62,12 +62,12 @@ void WindowTracker::Finish(std::uint32_t tick, WindowSummary* done) const {
   done->eta_percent = EtaPercent(loading_, unloading_, &done->eta_valid);
   done->peak_power = peak_power_;
   done->peak_torque = peak_torque_;
-  done->fit_sums = fit_sums_;
 }
 
 bool WindowTracker::Update(std::uint32_t tick, Segment segment, std::uint16_t repetition,
                            Power power, Torque torque, Angle joint,
-                           AngularVelocity velocity, WindowSummary* done) {
+                           AngularVelocity velocity, WindowSummary* done,
+                           InterfaceFitSums* done_fit) {
   const bool flexion_loading = segment == Segment::kFlexionLoading;
   const bool extension_loading = segment == Segment::kExtensionLoading;
   const bool unloading =
@@ -80,6 +80,7 @@ bool WindowTracker::Update(std::uint32_t tick, Segment segment, std::uint16_t re
   // Leaving the current window?
   if (phase_ == Phase::kUnloading && !(unloading && motion == motion_)) {
     Finish(tick, done);
+    *done_fit = fit_sums_;
     completed = true;
     phase_ = Phase::kNone;
   } else if (phase_ == Phase::kLoading && !(flexion_loading || extension_loading) &&

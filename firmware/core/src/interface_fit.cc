@@ -127,11 +127,25 @@ std::int64_t Offset(Mean tau, Mean theta, Mean omega, std::int32_t k, std::int32
 
 }  // namespace
 
+void InterfaceFitSums::Add(Angle theta_j, AngularVelocity omega_j, Torque torque) {
+  const std::int32_t t = theta_j.raw(), w = omega_j.raw(), q = torque.raw();
+  ++count;
+  theta += t;
+  omega += w;
+  tau += q;
+  theta_theta.AddProduct(t, t);
+  theta_omega.AddProduct(t, w);
+  omega_omega.AddProduct(w, w);
+  theta_tau.AddProduct(t, q);
+  omega_tau.AddProduct(w, q);
+  tau_tau.AddProduct(q, q);
+}
+
 std::int64_t Wide96::RoundDivide(std::uint32_t n) const {
   // |value| as three 32-bit limbs, divided limb by limb (64/32 divisions).
-  const bool negative = high_ < 0;
-  std::uint64_t low = low_;
-  auto high = static_cast<std::uint32_t>(high_);
+  const bool negative = high() < 0;
+  std::uint64_t low = this->low();
+  auto high = static_cast<std::uint32_t>(this->high());
   if (negative) {
     low = ~low + 1;
     high = ~high + (low == 0 ? 1u : 0u);

@@ -161,6 +161,7 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace,
   board_power.reserve(expected_ticks);
   struct BoardWindow {
     WindowSummary w;
+    InterfaceFit fit;
   };
   std::vector<BoardWindow> windows;
   std::vector<Angle> joints;  // the telemetry's θ_j by tick from `base`
@@ -194,7 +195,14 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace,
     }
     if (keep_samples) joints.push_back(r.telemetry.joint);
     while (app.PopEvent(&event)) {
-      if (event.kind == app::AppEvent::Kind::kWindow) windows.push_back({event.window});
+      if (event.kind == app::AppEvent::Kind::kWindow) {
+        // The main loop's solve, from the sums the tick queued beside the event.
+        InterfaceFitSums sums;
+        InterfaceFit fit;
+        if (app.PopWindowFit(event.window.start_tick, &sums))
+          fit = SolveInterfaceFit(sums);
+        windows.push_back({event.window, fit});
+      }
       if (event.kind == app::AppEvent::Kind::kFault) {
         out.faulted = true;
         out.fault = "fault " + host::DescribeFault(event.fault);
@@ -230,7 +238,7 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace,
     wo.profile = Resample(board_power, s, e);
     wo.truth_profile = Resample(truth_power, s, e);
     wo.peak_fraction = static_cast<double>(p - s) / static_cast<double>(e - s);
-    const InterfaceFit fit = SolveInterfaceFit(w.fit_sums);
+    const InterfaceFit& fit = bw.fit;
     wo.fit_valid = fit.valid();
     wo.stiffness = fit.stiffness.ToDouble();
     wo.damping = fit.damping.ToDouble();

@@ -111,6 +111,37 @@ MJC_VECTOR_TEST(JointApp, TrialRunsToCompletionThenIdles) {
   VT_EXPECT_EQ(changes, 2);
 }
 
+MJC_VECTOR_TEST(JointApp, EachWindowsFitSumsFollowItsEvent) {
+  // The main loop takes each kWindow event's sums by its start tick: every window of
+  // the trial finds its own (as many samples as the window has ticks), and a start
+  // tick no window had finds none.
+  MJC_FRESH_APP(app);
+  ScriptedIo io;
+  app.SetCalibration(TestCalibration());
+  app.ISR_Tick(io);
+  app.StartTrial(ShortSine());
+  int windows = 0, matched = 0;
+  AppEvent e;
+  // Past the trial's end: the last window closes a velocity delay after it.
+  for (int i = 0; i < 5000; ++i) {
+    app.ISR_Tick(io);
+    while (app.PopEvent(&e)) {
+      if (e.kind != AppEvent::Kind::kWindow) continue;
+      ++windows;
+      InterfaceFitSums sums;
+      if (app.PopWindowFit(e.window.start_tick, &sums) &&
+          sums.count == e.window.end_tick - e.window.start_tick) {
+        ++matched;
+      }
+    }
+  }
+  VT_EXPECT_EQ(windows, 4);  // flexion and extension of two cycles
+  VT_EXPECT_EQ(matched, 4);
+  InterfaceFitSums none;
+  VT_EXPECT_TRUE(!app.PopWindowFit(12345, &none));
+  VT_EXPECT_EQ(app.dropped_window_fits(), 0u);
+}
+
 MJC_VECTOR_TEST(JointApp, FaultStopsBridgeInSameTickAndLatches) {
   MJC_FRESH_APP(app);
   ScriptedIo io;

@@ -83,12 +83,13 @@ MJC_VECTOR_TEST(WindowTracker, SplitsAndSumsExactly) {
   // dropped.
   WindowTracker tracker(kTickHz);
   WindowSummary w;
+  InterfaceFitSums sums;
   int completed = 0;
   std::uint32_t tick = 0;
   auto run = [&](Segment s, int n, double watts) {
     for (int i = 0; i < n; ++i, ++tick) {
       if (tracker.Update(tick, s, 7, Power::Quantize(watts), Torque::Quantize(watts * 10),
-                         Angle{}, AngularVelocity{}, &w)) {
+                         Angle{}, AngularVelocity{}, &w, &sums)) {
         ++completed;
       }
     }
@@ -173,13 +174,14 @@ ChainResult RunChain(double k, double b, int extra_delay) {
         static_cast<Segment>(segment_delay.Push(static_cast<std::int32_t>(seg)));
     const Power p = Mul<Power>(aligned, v);
     WindowSummary win;
+    InterfaceFitSums sums;
     const auto rep = static_cast<std::uint16_t>((i - est.delay_ticks()) / period);
     if (tracker.Update(static_cast<std::uint32_t>(i), seg_aligned, rep, p, aligned,
-                       est.centre(), v, &win) &&
+                       est.centre(), v, &win, &sums) &&
         win.motion == Motion::kFlexion && win.repetition >= 1 && win.repetition <= 3) {
       eta_sum += win.eta_percent.ToDouble();
       load_sum += win.loading.ToDouble();
-      const InterfaceFit fit = SolveInterfaceFit(win.fit_sums);
+      const InterfaceFit fit = SolveInterfaceFit(sums);
       k_sum += fit.valid() ? fit.stiffness.ToDouble() : 0.0;
       b_sum += fit.valid() ? fit.damping.ToDouble() : 0.0;
       ++n;

@@ -39,7 +39,7 @@ TEST(Wide96, SumsAndDividesLikeInt128) {
                                          : std::int64_t{rng.NextI32()};
       const std::int64_t b = i % 89 == 0 ? std::numeric_limits<std::int32_t>::min()
                                          : std::int64_t{rng.NextI32()};
-      w.Add(a * b);
+      w.AddProduct(static_cast<std::int32_t>(a), static_cast<std::int32_t>(b));
       want += static_cast<__int128>(a * b);
     }
     ASSERT_TRUE(Value(w) == want);
@@ -54,11 +54,21 @@ TEST(Wide96, SumsAndDividesLikeInt128) {
 TEST(Wide96, LongestWindowOfFullScaleProductsFits) {
   // The bound of interface_fit.h: 2^32 − 1 terms of 2^62 stay below 2^95. Adding 2^62
   // 2^32 − 1 times is 4e9 additions; the sum is linear, so check the carries on a
-  // shortened run and the arithmetic of the bound.
+  // shortened run and the arithmetic of the bound; and a run of the largest negative
+  // and positive products, whose low words carry on every addition.
   Wide96 w;
   const std::int64_t full = std::int64_t{1} << 62;
-  for (int i = 0; i < 1 << 20; ++i) w.Add(full);
+  const std::int32_t min = std::numeric_limits<std::int32_t>::min();
+  for (int i = 0; i < 1 << 20; ++i) w.AddProduct(min, min);
   EXPECT_TRUE(Value(w) == (static_cast<__int128>(full) << 20));
+  Wide96 mixed;
+  __int128 want = 0;
+  const std::int32_t max = std::numeric_limits<std::int32_t>::max();
+  for (int i = 0; i < 1 << 20; ++i) {
+    mixed.AddProduct(i % 3 ? max : min, max);
+    want += static_cast<__int128>(std::int64_t{i % 3 ? max : min} * max);
+  }
+  EXPECT_TRUE(Value(mixed) == want);
   const __int128 longest = static_cast<__int128>(full) * 0xFFFFFFFFu;
   EXPECT_TRUE(longest < (static_cast<__int128>(1) << 95));
 }

@@ -96,6 +96,13 @@ class JointApp {
 
   bool PopEvent(AppEvent* out) { return events_.Pop(out); }
   std::uint32_t dropped_events() const { return events_.dropped(); }
+  // The least-squares sums of the window that started at `start_tick` (a kWindow
+  // event's window.start_tick), for SolveInterfaceFit. They travel in a queue of their
+  // own, so the events stay small (128 bytes each otherwise, 8 KB over the event
+  // queue); older sums whose events were lost are dropped on the way. False when they
+  // are not there (the queue was full when the window ended).
+  bool PopWindowFit(std::uint32_t start_tick, InterfaceFitSums* out);
+  std::uint32_t dropped_window_fits() const { return window_fits_.dropped(); }
 
   // The configuration in force, as the main loop sees it: a consistent copy of the
   // tick's, taken again only when the tick has applied a new one (a configuration or a
@@ -177,6 +184,13 @@ class JointApp {
   bool calibrated_ = false;
   SpscQueue<Request, 4> requests_;
   SpscQueue<AppEvent, 64> events_;
+  struct WindowFitSums {
+    std::uint32_t start_tick = 0;
+    InterfaceFitSums sums;
+  };
+  // Four windows: the main loop takes each with its kWindow event, and a trial ends at
+  // most ten windows a second (5 Hz).
+  SpscQueue<WindowFitSums, 4> window_fits_;
   std::atomic<std::int32_t> stream_target_{0};
   std::atomic<std::uint16_t> raised_fault_{0};  // a Fault code, 0 = none
   static_assert(std::atomic<std::uint16_t>::is_always_lock_free);

@@ -110,8 +110,9 @@ enum class FaultClear : std::uint8_t { kNone = 0, kCleared = 1, kRefused = 2 };
 struct TickResult {
   Actuation actuation;
   Telemetry telemetry;
-  bool window_completed = false;  // `window` holds a new summary
+  bool window_completed = false;  // `window` and `window_fit` hold a new summary
   WindowSummary window;
+  InterfaceFitSums window_fit;           // the window's sums for the attachment's fit
   Fault raised = Fault::kNone;           // a fault latched in this very tick
   FaultClear clear = FaultClear::kNone;  // a requested clear, judged on this sample
 };
@@ -131,9 +132,9 @@ class ControlTick {
   // refuses a config before handing it to the tick).
   static ControlConfigError Validate(const ControlConfig& config);
 
-  // Runs one tick (interrupt context). Writes every field of *out except `window`,
-  // which is written only when window_completed is set: the summary is not copied or
-  // cleared on the other ticks.
+  // Runs one tick (interrupt context). Writes every field of *out except `window` and
+  // `window_fit`, which are written only when window_completed is set: the summary is not
+  // copied or cleared on the other ticks.
   void ISR_Step(const Sample& sample, TickResult* out);
 
   // Bridge permission from the application (idle vs running): the bridge is enabled

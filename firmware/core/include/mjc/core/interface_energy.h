@@ -66,9 +66,6 @@ struct WindowSummary {
   bool eta_valid = false;
   Power peak_power;    // the sample of largest |P|, with its sign
   Torque peak_torque;  // the sample of largest |τ|, with its sign
-  // The window's least-squares sums of τ against θ_j and θ̇_j (interface_fit.h), for
-  // the main loop's SolveInterfaceFit.
-  InterfaceFitSums fit_sums;
 };
 
 // η in percent from raw energy sums (any common unit), rounded to nearest.
@@ -83,9 +80,12 @@ class WindowTracker {
   explicit WindowTracker(std::uint32_t tick_hz) : scale_(tick_hz) {}
 
   // One tick of aligned samples (power, torque, joint angle and velocity of one
-  // instant). Returns true and fills *done when a window has just completed.
+  // instant). Returns true and fills *done, and *done_fit with the window's
+  // least-squares sums of τ against θ_j and θ̇_j (interface_fit.h), when a window has
+  // just completed.
   bool Update(std::uint32_t tick, Segment segment, std::uint16_t repetition, Power power,
-              Torque torque, Angle joint, AngularVelocity velocity, WindowSummary* done);
+              Torque torque, Angle joint, AngularVelocity velocity, WindowSummary* done,
+              InterfaceFitSums* done_fit);
 
   std::uint32_t dropped_windows() const { return dropped_; }
   void Clear();

@@ -9,12 +9,16 @@
 // Cortex-M4 and independent of when the main loop looks. The main loop solves the
 // system once per window (SolveInterfaceFit), with Eigen fixed-size integer matrices.
 //
-// Why the tick accumulates instead of handing every sample to the main loop: a queue
-// of samples would cost the tick a push of three words per tick (about the same
-// instructions as the products here, measured in `./bench` as tick_instructions_cm4),
-// plus RAM for every sample the main loop may fall behind by (a flash page erase
-// stalls it for ~20 ms: 200 samples, 2.4 KB), and a sample lost to a full queue would
-// make the fit inexact. The sums cost 100 bytes and lose nothing.
+// Why the tick accumulates instead of handing every sample to the main loop. Measured
+// with `./bench` (tick_instructions_cm4, mean of 100 ticks mid-trial): the tick went
+// from 982 to 1,097 Cortex-M4 instructions (+115, 0.7 % of the 17,000 cycles a tick
+// has at 170 MHz). A queue of samples would cost the tick less (a push of three words,
+// ~20 instructions) but not the core: the main loop would still do these products for
+// every sample, plus the pops. It would also need RAM for every sample the main loop
+// can fall behind by (a flash page erase stalls it for up to ~40 ms: 400 samples,
+// 4.8 KB), and a sample lost to a full queue would make the fit inexact. The sums
+// cost 128 bytes (and a queue of four completed windows' to the main loop, 544 bytes:
+// JointApp::PopWindowFit), lose nothing, and leave the main loop one solve per window.
 //
 // Overflow bound (the longest window): a window's ticks are counted in a uint32, so
 // n < 2^32. Every regressor is a raw int32 (|x| ≤ 2^31), so |Σx| < 2^31·2^32 = 2^63
@@ -40,26 +44,36 @@
 
 namespace mjc {
 
-// A signed 96-bit sum of int64 terms: the normal-equation products of a window.
-// Written by hand because the Cortex-M4's compiler has no 128-bit integer; three
-// 32-bit limbs are what its add-with-carry instructions work on.
+// A signed 96-bit sum of up to 2^32 − 1 products of two int32s: the normal-equation
+// sums of a window. Written by hand because the Cortex-M4's compiler has no 128-bit
+// integer. Each product v = v_h·2^32 + v_l (v_l the unsigned low word, v_h = v >> 32,
+// |v_h| ≤ 2^30) is added as two independent 64-bit sums, Σv_l < 2^32·2^32 and
+// |Σv_h| ≤ 2^30·2^32: two add-with-carry pairs and no carry between them, the cheapest
+// form on the M4 (a carry out of the low word costs a compare and a branch-free select
+// per term). The value Σv_h·2^32 + Σv_l is formed only when read.
 class Wide96 {
  public:
-  // Adds v. The sum must stay within ±2^95 (the caller's bound).
-  void Add(std::int64_t v) {
-    const std::uint64_t sum = low_ + static_cast<std::uint64_t>(v);
-    high_ += static_cast<std::int32_t>(v >> 63) + (sum < low_ ? 1 : 0);
-    low_ = sum;
+  // Adds a·b.
+  void AddProduct(std::int32_t a, std::int32_t b) {
+    const std::int64_t v = std::int64_t{a} * b;
+    low_ += static_cast<std::uint32_t>(static_cast<std::uint64_t>(v));
+    high_ += v >> 32;
   }
   // round(value / n) for n ≥ 1; the caller guarantees it fits int64 (a mean of
   // products of int32s: |v/n| ≤ 2^62). Ties away from zero.
   std::int64_t RoundDivide(std::uint32_t n) const;
-  std::int32_t high() const { return high_; }
-  std::uint64_t low() const { return low_; }
+  // The value's top 32 bits (signed) and low 64 bits.
+  std::int32_t high() const { return static_cast<std::int32_t>(Upper() >> 32); }
+  std::uint64_t low() const {
+    return (static_cast<std::uint64_t>(Upper()) << 32) | (low_ & 0xFFFFFFFFu);
+  }
 
  private:
+  // The value's bits 32..95: Σv_h plus the carries out of Σv_l's low word.
+  std::int64_t Upper() const { return high_ + static_cast<std::int64_t>(low_ >> 32); }
+
   std::uint64_t low_ = 0;
-  std::int32_t high_ = 0;
+  std::int64_t high_ = 0;
 };
 
 // The sums of one window's aligned samples: θ (Angle raw, Q24), ω (AngularVelocity
@@ -69,20 +83,11 @@ struct InterfaceFitSums {
   std::int64_t theta = 0, omega = 0, tau = 0;
   Wide96 theta_theta, theta_omega, omega_omega, theta_tau, omega_tau, tau_tau;
 
-  // One aligned sample (tick context).
-  void Add(Angle theta_j, AngularVelocity omega_j, Torque torque) {
-    const std::int64_t t = theta_j.raw(), w = omega_j.raw(), q = torque.raw();
-    ++count;
-    theta += t;
-    omega += w;
-    tau += q;
-    theta_theta.Add(t * t);
-    theta_omega.Add(t * w);
-    omega_omega.Add(w * w);
-    theta_tau.Add(t * q);
-    omega_tau.Add(w * q);
-    tau_tau.Add(q * q);
-  }
+  // One aligned sample (tick context). Out of line on purpose: a straight-line
+  // function keeps each sum's load, add and store together, where inlined into the
+  // window tracker's branches GCC spilled all of them to the stack (the tick grew by 172
+  // instructions, not 112; tick_instructions_cm4).
+  void Add(Angle theta_j, AngularVelocity omega_j, Torque torque);
   void Clear() { *this = InterfaceFitSums{}; }
 };
 
@@ -93,6 +98,7 @@ enum class InterfaceFitStatus : std::uint8_t {
   kNoMotion = 2,       // θ_j or θ̇_j constant over the window
   kCollinear = 3,      // θ_j and θ̇_j too correlated (ρ² > 3/4) to tell k_i from b_i
   kOutOfRange = 4,     // k_i, b_i or τ_0 beyond their formats (±128)
+  kNotDelivered = 5,   // the window's sums did not reach the main loop
 };
 
 // A fit needs at least this many samples: a tenth of a second at 10 kHz, far less than

@@ -49,7 +49,7 @@ constexpr bool ValidEnumValue(Fault f) {
 }
 constexpr bool ValidEnumValue(Segment s) { return static_cast<std::uint8_t>(s) <= 7; }
 constexpr bool ValidEnumValue(InterfaceFitStatus s) {
-  return static_cast<std::uint8_t>(s) <= 4;
+  return static_cast<std::uint8_t>(s) <= 5;
 }
 constexpr bool ValidEnumValue(Motion m) {
   return m == Motion::kFlexion || m == Motion::kExtension;
