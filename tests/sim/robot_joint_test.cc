@@ -32,15 +32,6 @@ host::RobotDescription Load(const std::string& file) {
   return *robot;
 }
 
-RampedSineConfig CalibrationSweep() {
-  RampedSineConfig s;
-  s.end_amplitude = Angle::Quantize(30.0 * kDeg);
-  s.frequency = Frequency::FromDouble(0.5);
-  s.repetitions = 10;
-  s.rest_ms = 500;
-  return s;
-}
-
 // The plant of the example joint: the default parameter set (its slack moved off the
 // default's, so a fit that kept the default's numbers would show) with the
 // description's pulleys, springs and zeros.
@@ -103,7 +94,7 @@ TEST(RobotDescription, CalibratesAJointWithAlphaNotOne) {
     SCOPED_TRACE(fit_alpha ? "α fitted" : "α from the description");
     SimBoard board(params, app::DefaultJointConfig());
     const CalibrationOutcome cal =
-        RunCalibration(board, CalibrationSweep(), {&robot, fit_alpha});
+        RunCalibration(board, PaperCalibrationSweep(), {&robot, fit_alpha});
     ASSERT_TRUE(cal.uploaded) << cal.message << " / " << cal.fit.message;
     const double err_r = (cal.fit.c_right_rad - truth.c_right_rad) / kDeg;
     const double err_l = (cal.fit.c_left_rad - truth.c_left_rad) / kDeg;
@@ -130,7 +121,7 @@ TEST(RobotDescription, TheDefaultAssumptionsMiscalibrateThatJoint) {
   const plant::PlantParams params = ExamplePlant(robot);
   const Truth truth = TruthOf(params);
   SimBoard board(params, app::DefaultJointConfig());
-  const CalibrationOutcome cal = RunCalibration(board, CalibrationSweep());
+  const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep());
   const bool slack_right =
       cal.uploaded && std::fabs(cal.fit.c_right_rad - truth.c_right_rad) <= 0.05 * kDeg &&
       std::fabs(cal.fit.c_left_rad - truth.c_left_rad) <= 0.05 * kDeg;

@@ -52,6 +52,15 @@ SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions) {
   return s;
 }
 
+RampedSineConfig PaperCalibrationSweep() {
+  RampedSineConfig s;
+  s.end_amplitude = Angle::Quantize(30.0 * std::numbers::pi / 180.0);
+  s.frequency = Frequency::FromDouble(0.5);
+  s.repetitions = 10;
+  s.rest_ms = 500;
+  return s;
+}
+
 CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep,
                                   const CalibrationJoint& joint_of) {
   CalibrationOutcome out;

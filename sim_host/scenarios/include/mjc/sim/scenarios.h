@@ -47,6 +47,10 @@ struct CalibrationJoint {
   bool fit_alpha = false;
 };
 
+// The paper's calibration sweep: 30° at 0.5 Hz over 10 cycles, 500 ms rests (the
+// defaults of `mjc calibrate`).
+RampedSineConfig PaperCalibrationSweep();
+
 // Runs the increasing-amplitude sweep on the robot alone (the plant must have no
 // interface), fits c_r, c_l with NLopt on the board's own θ_m, θ_j, uploads the
 // calibration and waits for the board to accept it.
