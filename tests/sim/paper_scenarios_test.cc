@@ -25,20 +25,11 @@ plant::PlantParams Robot(double max_step_s = kPaperStep_s) {
   return p;
 }
 
-RampedSineConfig CalibrationSweep() {
-  RampedSineConfig s;
-  s.end_amplitude = Angle::Quantize(30.0 * kDeg);
-  s.frequency = Frequency::FromDouble(0.5);
-  s.repetitions = 10;
-  s.rest_ms = 500;
-  return s;
-}
-
 // A calibrated board with `subject`'s interface donned.
 struct Bench {
   explicit Bench(const plant::PlantParams& robot)
       : board(robot, app::DefaultJointConfig()) {
-    calibration = RunCalibration(board, CalibrationSweep());
+    calibration = RunCalibration(board, PaperCalibrationSweep());
   }
   SimBoard board;
   CalibrationOutcome calibration;
