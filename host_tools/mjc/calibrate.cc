@@ -1,9 +1,13 @@
 // mjc calibrate: the paper's calibration on a board over the bus — start the
 // increasing-amplitude sweep on the robot alone, record the board's own θ_m and θ_j
 // (its angle telemetry), fit c_r, c_l and the joint lag with NLopt, save the record in
-// a JSON file and upload it over ISO-TP. The upload replaces only the backlash: the SEA
-// stiffness and joint zero count are the ones the board already holds. Its outputs go
-// to a new folder (calibration.json, sweep.csv, run.json), never over an earlier run's.
+// a JSON file and upload it over ISO-TP. Without --robot the fit takes α = 1 and the
+// upload replaces only the backlash: the SEA stiffness and joint zero count are the ones
+// the board already holds. With --robot FILE (a robot description,
+// mjc/host/robot_description.h) the fit takes the joint's α = r_m/r_j (or fits it within
+// ±20 % of it with --fit-alpha) and the record carries the joint's K = 2kr_j² and joint
+// zero. Its outputs go to a new folder (calibration.json, sweep.csv, run.json), never
+// over an earlier run's.
 
 #include <algorithm>
 #include <cerrno>
@@ -23,6 +27,7 @@
 #include "mjc/host/calibration_io.h"
 #include "mjc/host/describe.h"
 #include "mjc/host/report.h"
+#include "mjc/host/robot_description.h"
 #include "mjc/host/run_record.h"
 #include "mjc/host/units.h"
 
@@ -68,6 +73,8 @@ void AddCalibrate(CLI::App& app) {
   static int node = 1, cycles = 10;
   static double amplitude_deg = 30, frequency_hz = 0.5;
   static bool upload = true;
+  static std::string robot_path;
+  static bool fit_alpha = false;
   static EstopOptions estop_options;
   AddIfaceOption(cmd, &iface);
   AddNodeOption(cmd, &node);
@@ -83,7 +90,35 @@ void AddCalibrate(CLI::App& app) {
   AddOutputOptions(cmd, &output, "out/calibration");
   AddEstopOptions(cmd, &estop_options, EstopDefault::kConfig);
   cmd->add_flag("!--no-upload", upload, "Fit and save only");
+  auto* robot_option = cmd->add_option(
+      "--robot", robot_path,
+      "Robot description of the joint (robots/*.json): the fit takes its α = r_m/r_j, "
+      "the record its SEA stiffness K = 2kr_j² and joint zero");
+  cmd->add_flag("--fit-alpha", fit_alpha,
+                "Fit α too, within ±20 % of the description's (a fit on a bound is "
+                "refused)")
+      ->needs(robot_option);
   cmd->callback([] {
+    // The joint's description first: a bad file moves nothing and writes nothing.
+    std::optional<host::RobotDescription> robot;
+    if (!robot_path.empty()) {
+      std::string why;
+      robot = host::LoadRobotDescription(robot_path, &why);
+      if (!robot) throw Failure("robot description refused: " + why);
+      // The sweep turns the motor pulley ±amplitude: the joint follows at α times that.
+      const double joint_deg = robot->Alpha() * amplitude_deg;
+      if (joint_deg > robot->flexion_limit_deg ||
+          -joint_deg < robot->extension_limit_deg) {
+        char text[200];
+        std::snprintf(text, sizeof text,
+                      "--amplitude-deg %.1f moves %s's joint ±%.1f° (α %.3f), beyond its "
+                      "travel [%.1f°, %.1f°]",
+                      amplitude_deg, robot->name.c_str(), joint_deg, robot->Alpha(),
+                      robot->extension_limit_deg, robot->flexion_limit_deg);
+        throw Failure(Exit::kUsage, text);
+      }
+      std::printf("robot %s\n", host::DescribeRobot(*robot, robot_path).c_str());
+    }
     host::OutputFolder folder;
     try {
       folder = host::PrepareOutputFolder(output.out, "out/calibration", output.force,
@@ -262,11 +297,18 @@ void AddCalibrate(CLI::App& app) {
       host::BacklashFitOptions options;
       options.fit_lag = true;
       options.sample_rate_hz = *rate_hz;
+      if (robot) {
+        host::UseRobotAlpha(*robot, fit_alpha, &options);
+        // Recorded with the zero the board holds; fitted as with the joint's own.
+        const double shift = host::JointZeroShift(held->record.joint_zero_count, *robot);
+        for (double& j : joint) j += shift;
+      }
       const host::BacklashFit fit = host::FitBacklash(motor, joint, options);
       const auto config = host::ToFirmwareConfig(fit, &why);
       if (!config) throw Failure("fit not usable: " + why);
       CalibrationRecord record = held->record;
       record.backlash = *config;
+      if (robot) host::UseRobotJoint(*robot, &record);
       record.fit_rms_urad =
           static_cast<std::uint32_t>(std::lround(fit.rms_error_rad * 1e6));
       record.fit_lag_us = static_cast<std::uint32_t>(std::lround(fit.lag_s * 1e6));
@@ -277,6 +319,13 @@ void AddCalibrate(CLI::App& app) {
           motor.size(), *rate_hz, host::RadToDeg(fit.c_right_rad),
           host::RadToDeg(fit.c_left_rad), fit.lag_s * 1e3,
           host::RadToDeg(fit.rms_error_rad), fit.elapsed_ms);
+      std::printf("α %.4f (%s), SEA stiffness %.4f N·m/rad and joint zero %u (%s)\n",
+                  record.backlash.alpha.ToDouble(),
+                  !robot      ? "assumed 1, no --robot"
+                  : fit_alpha ? "fitted within ±20 % of the description's"
+                              : "the description's",
+                  record.sea_stiffness.ToDouble(), unsigned{record.joint_zero_count},
+                  robot ? ("from " + robot->name).c_str() : "kept from the board");
       // Saved before the upload, so a failed upload loses nothing: `mjc cal upload`
       // sends the file later.
       host::WriteFile(out_path, host::CalibrationToJson(record).dump(2) + "\n");

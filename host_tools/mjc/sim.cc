@@ -34,9 +34,11 @@
 #include "mjc/build_id.h"
 #include "mjc/host/can_link.h"
 #include "mjc/host/describe.h"
+#include "mjc/host/robot_description.h"
 #include "mjc/plant/params.h"
 #include "mjc/sim/booting_board.h"
 #include "mjc/sim/link_can_port.h"
+#include "mjc/sim/robot_plant.h"
 
 namespace mjc::cli {
 namespace {
@@ -139,7 +141,8 @@ void AddSim(CLI::App& app) {
       "Signals: SIGUSR1 makes the joint encoder flag an error (fault 101) until "
       "SIGUSR2. "
       "A bus-off error frame on the interface is taken as the board's own bus-off.");
-  static std::string iface, robot = "default", subject, flash_path, reset_name;
+  static std::string iface, robot = "default", subject, flash_path, reset_name,
+                            robot_description;
   static int node = 1;
   static double seconds = 0, speed = 1;
   AddIfaceOption(cmd, &iface);
@@ -150,6 +153,9 @@ void AddSim(CLI::App& app) {
       "own");
   cmd->add_option("--robot", robot, "Plant parameter set of the robot (name or .json)")
       ->capture_default_str();
+  cmd->add_option("--robot-description", robot_description,
+                  "A joint's robot description (robots/*.json): the plant set with its "
+                  "α = r_m/r_j, springs and encoder zeros");
   cmd->add_option("--subject", subject,
                   "Don this subject's interface (name or .json); none: robot alone");
   cmd->add_option("--seconds", seconds,
@@ -189,6 +195,14 @@ void AddSim(CLI::App& app) {
                  : plant::LoadPlantParams(s);
     };
     plant::PlantParams params = load(robot);
+    if (!robot_description.empty()) {
+      const auto described = host::LoadRobotDescription(robot_description, &why);
+      if (!described) throw Failure("robot description refused: " + why);
+      params = sim::PlantForRobot(*described, params, app::DefaultJointConfig(),
+                                  robot_description);
+      std::fprintf(stderr, "mjc sim: robot %s\n",
+                   host::DescribeRobot(*described, robot_description).c_str());
+    }
     if (!subject.empty()) params.interface = load(subject).interface;
 
     // The board's flash. A new one comes from the factory: this mjc's image installed,

@@ -18,8 +18,6 @@ namespace {
 
 // What a Maestro joint plausibly has (see CalibrationFromJson).
 constexpr double kPlausibleOffsetDeg = 10;
-constexpr double kPlausibleAlpha[2] = {0.5, 2.0};
-constexpr double kPlausibleStiffness[2] = {0.063, 6.3};
 
 }  // namespace
 

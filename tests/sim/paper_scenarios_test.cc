@@ -25,13 +25,11 @@ plant::PlantParams Robot(double max_step_s = kPaperStep_s) {
   return p;
 }
 
-RampedSineConfig CalibrationSweep() { return PaperCalibrationSweep(); }
-
 // A calibrated board with `subject`'s interface donned.
 struct Bench {
   explicit Bench(const plant::PlantParams& robot)
       : board(robot, app::DefaultJointConfig()) {
-    calibration = RunCalibration(board, CalibrationSweep());
+    calibration = RunCalibration(board, PaperCalibrationSweep());
   }
   SimBoard board;
   CalibrationOutcome calibration;

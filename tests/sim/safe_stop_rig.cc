@@ -97,8 +97,10 @@ class SampleReference {
   // the reference starts again on the same tick's sample.
   void Restart() { seeded_ = false; }
 
-  // One tick's sample, and the duty written over the tick before it.
-  void Update(const Sample& s, double applied_duty) {
+  // One tick's sample, the duty written over the tick before it and the position
+  // loop's error behind that duty (the setpoint the board commanded then, less the
+  // motor angle computed here then).
+  void Update(const Sample& s, double applied_duty, double applied_error) {
     parity_ok_ = std::popcount(s.joint_frame) % 2 == 0;
     error_flag_ = (s.joint_frame & 0x4000u) != 0;
     overrun_ = s.tick_overrun;
@@ -147,9 +149,9 @@ class SampleReference {
     // starts with the first sample after a restart.
     const SupervisorConfig& v = config_.supervisor;
     const bool frozen = seeded_ && motor_count_ == last_motor_count_;
-    motor_frozen_ticks_ = frozen && std::fabs(applied_duty) >= v.stuck_duty.ToDouble()
-                              ? motor_frozen_ticks_ + 1
-                              : 0;
+    const bool driven = std::fabs(applied_duty) >= v.stuck_duty.ToDouble() &&
+                        std::fabs(applied_error) > v.stuck_hold_error.ToDouble();
+    motor_frozen_ticks_ = frozen && driven ? motor_frozen_ticks_ + 1 : 0;
     motor_stuck_ = seeded_ && motor_frozen_ticks_ >= v.motor_stuck_ticks;
     joint_jump_ =
         seeded_ && std::fabs(joint_ - previous_joint) > v.joint_jump_max.ToDouble();
@@ -352,8 +354,10 @@ class Rig {
     if (board_.app().last().telemetry.tick != next_tick_) Fail("tick count mismatch");
     if (restart_pending_) reference_.Restart();
     restart_pending_ = false;
-    reference_.Update(board_.io().last_sample(), applied_duty_);
+    reference_.Update(board_.io().last_sample(), applied_duty_, applied_error_);
     applied_duty_ = board_.io().duty();
+    applied_error_ =
+        board_.app().last().telemetry.setpoint.ToDouble() - reference_.motor();
     ++next_tick_;
     if (bus_.down && static_cast<std::int32_t>(now() - bus_up_tick_) >= 0) {
       bus_.down = false;
@@ -481,6 +485,7 @@ class Rig {
   std::string error_;
   std::uint32_t next_tick_ = 0;
   double applied_duty_ = 0;
+  double applied_error_ = 0;
   bool restart_pending_ = true;
   std::vector<double> truth_velocity_;  // by board tick
 

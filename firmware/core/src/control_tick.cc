@@ -101,6 +101,7 @@ void ControlTick::Restart() {
   windows_.Clear();
   energy_.Clear();
   last_duty_ = Duty{};
+  last_error_ = Angle{};
 }
 
 void ControlTick::Arm(bool armed) {
@@ -154,6 +155,7 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
                            .torque = torque,
                            .joint_velocity = velocity,
                            .applied_duty = last_duty_,
+                           .motor_error = last_error_,
                            .tick_overrun = sample.tick_overrun,
                            .external = external_fault_};
   external_fault_ = Fault::kNone;
@@ -190,6 +192,7 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
     loop_state_.Clear();
   }
   last_duty_ = duty;
+  last_error_ = enabled ? setpoint - motor : Angle{};
   r.actuation = {duty, enabled};
 
   t.tick = tick_;

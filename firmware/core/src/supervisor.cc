@@ -12,6 +12,7 @@ SupervisorConfigError Validate(const SupervisorConfig& c) {
   if (c.stuck_motor_travel <= Angle{}) return E::kStuckTravel;
   if (c.stuck_duty <= Duty{}) return E::kStuckDuty;
   if (c.motor_stuck_ticks == 0) return E::kMotorStuckTicks;
+  if (c.stuck_hold_error <= Angle{}) return E::kStuckHoldError;
   return E::kOk;
 }
 
@@ -48,8 +49,10 @@ void Supervisor::Remember(const SupervisorInput& in) {
 
 Fault Supervisor::Check(std::uint32_t tick, const SupervisorInput& in) {
   if (state_->latched != Fault::kNone) return state_->latched;
-  // The frozen-motor counter includes this tick before it is judged.
-  const bool driven = Abs(in.applied_duty) >= config_->stuck_duty;
+  // The frozen-motor counter includes this tick before it is judged. A motor held at
+  // its setpoint is not driven to move, whatever duty the hold takes.
+  const bool driven = Abs(in.applied_duty) >= config_->stuck_duty &&
+                      Abs(in.motor_error) > config_->stuck_hold_error;
   if (state_->have_history && driven && in.motor_count == state_->last_motor_count) {
     ++state_->motor_frozen_ticks;
   } else {

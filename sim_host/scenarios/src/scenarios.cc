@@ -54,15 +54,15 @@ SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions) {
 
 RampedSineConfig PaperCalibrationSweep() {
   RampedSineConfig s;
-  s.start_amplitude = Angle{};
   s.end_amplitude = Angle::Quantize(30.0 * std::numbers::pi / 180.0);
-  s.frequency = Frequency::FromDouble(kPaperFrequencyHz);
+  s.frequency = Frequency::FromDouble(0.5);
   s.repetitions = 10;
   s.rest_ms = 500;
   return s;
 }
 
-CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep) {
+CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep,
+                                  const CalibrationJoint& joint_of) {
   CalibrationOutcome out;
   app::JointApp& app = board.app();
   const plant::CableParams& cable = board.plant().params().cable;
@@ -98,6 +98,13 @@ CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep
   host::BacklashFitOptions options;
   options.fit_lag = true;
   options.sample_rate_hz = board.tick_hz();
+  const ControlConfig& board_config = app.control().config();
+  if (joint_of.robot != nullptr) {
+    host::UseRobotAlpha(*joint_of.robot, joint_of.fit_alpha, &options);
+    const double shift =
+        host::JointZeroShift(board_config.joint_encoder.zero_offset, *joint_of.robot);
+    for (double& j : joint) j += shift;
+  }
   out.fit = host::FitBacklash(motor, joint, options);
   out.error_right_deg =
       (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / std::numbers::pi;
@@ -109,10 +116,14 @@ CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep
     out.message = "calibration refused: " + why;
     return out;
   }
-  // The backlash is what was fitted; stiffness and zero stay the board's.
-  const ControlConfig& board_config = app.control().config();
-  out.record = {*config, board_config.sea_stiffness,
-                board_config.joint_encoder.zero_offset};
+  // The backlash is what was fitted; stiffness and zero stay the board's unless the
+  // joint's description gives them.
+  protocol::CalibrationRecord record;
+  record.backlash = *config;
+  record.sea_stiffness = board_config.sea_stiffness;
+  record.joint_zero_count = board_config.joint_encoder.zero_offset;
+  if (joint_of.robot != nullptr) host::UseRobotJoint(*joint_of.robot, &record);
+  out.record = {record.backlash, record.sea_stiffness, record.joint_zero_count};
   const app::CommandOutcome o = app.SetCalibration(out.record);
   board.Tick();
   out.uploaded = o.result == app::CommandOutcomeCode::kAccepted && app.calibrated();

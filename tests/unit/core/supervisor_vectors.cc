@@ -41,9 +41,11 @@ std::int64_t RoundToInt(double x) {
 }
 
 // A good sample of a joint at `joint` rad and a motor pulley at `motor` rad, as the
-// encoders report them: both angles on their count grids.
+// encoders report them: both angles on their count grids. The position loop is `error`
+// rad off its setpoint (by default behind a moving one).
 SupervisorInput Sample(double joint, double motor, double torque = 0.05,
-                       double joint_velocity = 0.0, double duty = 0.1) {
+                       double joint_velocity = 0.0, double duty = 0.1,
+                       double error = 0.01) {
   SupervisorInput in;
   const std::int64_t k = RoundToInt(joint * kJointCountsPerRad);
   in.joint_count = static_cast<std::uint16_t>(static_cast<std::uint64_t>(k) & 0x3FFFu);
@@ -53,6 +55,7 @@ SupervisorInput Sample(double joint, double motor, double torque = 0.05,
   in.torque = Torque::Quantize(torque);
   in.joint_velocity = AngularVelocity::Quantize(joint_velocity);
   in.applied_duty = Duty::Quantize(duty);
+  in.motor_error = Angle::Quantize(error);
   return in;
 }
 
@@ -158,6 +161,9 @@ MJC_VECTOR_TEST(Supervisor, ConfigsThatWouldLatchOrHideFaultsAreRefused) {
   c = {};
   c.motor_stuck_ticks = 0;
   VT_EXPECT_TRUE(mjc::Validate(c) == E::kMotorStuckTicks);
+  c = {};
+  c.stuck_hold_error = Angle{};
+  VT_EXPECT_TRUE(mjc::Validate(c) == E::kStuckHoldError);
 }
 
 MJC_VECTOR_TEST(SupervisorFault, JointParity) {
@@ -324,13 +330,19 @@ MJC_VECTOR_TEST(SupervisorFault, JointStuck) {
   VT_EXPECT_EQ(F(Fault::kJointStuck), 103);
 }
 
-// A driven tick whose motor count equals the previous sample's, counted here.
+// The documented hold tolerance (supervisor.h): 2.5e-4 rad off the setpoint.
+constexpr double kStuckHoldErrorRad = 2.5e-4;
+
+// A driven tick (duty at or above stuck_duty, the loop more than the hold tolerance off
+// its setpoint) whose motor count equals the previous sample's, counted here.
 struct FrozenCounter {
   bool have_previous = false;
   std::int64_t previous = 0;
   std::uint32_t run = 0;
   void Add(const SupervisorInput& in, Duty stuck_duty) {
-    const bool driven = mjc::Abs(in.applied_duty) >= stuck_duty;
+    const double error = in.motor_error.ToDouble();
+    const bool driven = mjc::Abs(in.applied_duty) >= stuck_duty &&
+                        (error > kStuckHoldErrorRad || error < -kStuckHoldErrorRad);
     run = (have_previous && driven && in.motor_count == previous) ? run + 1 : 0;
     previous = in.motor_count;
     have_previous = true;
@@ -405,6 +417,35 @@ MJC_VECTOR_TEST(SupervisorFault, MotorStuckCounterRestartsOnMotionOrLowDuty) {
   VT_EXPECT_EQ(Feed(rig, b, 1999), 0);
   // Verify: the 2000th in a row is the fault.
   VT_EXPECT_EQ(F(rig.Check(b)), F(Fault::kMotorStuck));
+}
+
+MJC_VECTOR_TEST(SupervisorFault, MotorHeldAtItsSetpointIsNotStuck) {
+  // A pulley held still on its setpoint under load (duty 0.34, the hold against a cable
+  // the static friction keeps pressed on the slack edge at α = 1.25): the hold is not
+  // a stall, however long. The same frozen count with the loop one LSB further off
+  // its setpoint than the tolerance is one, after exactly motor_stuck_ticks.
+  for (const double sign : {1.0, -1.0}) {
+    const SupervisorConfig c;
+    VT_EXPECT_TRUE(c.stuck_hold_error == Angle::Quantize(kStuckHoldErrorRad));
+    const double at = sign * c.stuck_hold_error.ToDouble();
+    Rig rig;
+    const SupervisorInput held = Sample(-0.009, 0.0, -0.03, 0.0, sign * 0.34, at);
+    VT_EXPECT_EQ(Feed(rig, held, 5000), 0);  // 500 ms of hold at the tolerance
+    SupervisorInput off = held;
+    off.motor_error = sign > 0 ? c.stuck_hold_error + Angle::Epsilon()
+                               : -c.stuck_hold_error - Angle::Epsilon();
+    FrozenCounter counter;
+    counter.Add(held, c.stuck_duty);
+    int early = 0;
+    Fault got = Fault::kNone;
+    while (counter.run < c.motor_stuck_ticks) {
+      counter.Add(off, c.stuck_duty);
+      got = rig.Check(off);
+      if (counter.run < c.motor_stuck_ticks && got != Fault::kNone) ++early;
+    }
+    VT_EXPECT_EQ(early, 0);
+    VT_EXPECT_EQ(F(got), F(Fault::kMotorStuck));
+  }
 }
 
 MJC_VECTOR_TEST(Supervisor, ThresholdsExactlyAtTheLimitPassOneLsbBeyondFaults) {

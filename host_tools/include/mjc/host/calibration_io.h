@@ -15,6 +15,12 @@
 
 namespace mjc::host {
 
+// What a Maestro joint plausibly has: α = r_m / r_j within [0.5, 2] and an SEA stiffness
+// within a decade of the default joint's 0.63 N·m/rad (CalibrationFromJson warns outside
+// them; a robot description, robot_description.h, is refused outside them).
+inline constexpr double kPlausibleAlpha[2] = {0.5, 2.0};
+inline constexpr double kPlausibleStiffness[2] = {0.063, 6.3};  // N·m/rad
+
 nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& record);
 
 // The keys of a calibration file, as CalibrationToJson writes them.

@@ -198,6 +198,7 @@ class ControlTick {
   Angle joint_;  // last good θ_j
   std::uint16_t joint_count_ = 0;
   Duty last_duty_;
+  Angle last_error_;  // the position loop's setpoint − θ_m behind last_duty_
 };
 
 }  // namespace mjc

@@ -56,10 +56,18 @@ struct SupervisorConfig {
   // Motor travel with the joint count frozen: the slack (≈ 2°) plus the full spring
   // deflection (0.2 N·m / 0.63 N·m/rad ≈ 0.32 rad) is under 0.4 rad; 0.6 rad cannot be.
   Angle stuck_motor_travel = Angle::FromDouble(0.6);
-  // |duty| at or above this with the motor count frozen for motor_stuck_ticks: stalled
-  // motor or dead encoder.
+  // |duty| at or above this with the motor count frozen for motor_stuck_ticks, while the
+  // position loop is more than stuck_hold_error off its setpoint: stalled motor or dead
+  // encoder.
   Duty stuck_duty = Duty::FromDouble(0.3);
   std::uint32_t motor_stuck_ticks = 2000;  // 200 ms at 10 kHz
+  // A motor the loop holds at its setpoint is not stalled, whatever duty the hold takes:
+  // at rest the cable's static friction can keep it pressed on the pulley's slack edge,
+  // and the pulley then holds up to α·0.3 N·m (duty 0.28 at α = 1, 0.34 at α = 1.25 on
+  // the simulated joint), with the count still. A loop that settles on its setpoint ends
+  // a few counts off it (8 counts here, 0.014°, its P term 0.01 duty); a stalled motor
+  // or a dead encoder under a moving setpoint falls behind by more within milliseconds.
+  Angle stuck_hold_error = Angle::FromDouble(2.5e-4);  // motor-pulley rad
 };
 
 // A SupervisorConfig's first invalid field. Stable numbers. A limit that no healthy
@@ -67,14 +75,15 @@ struct SupervisorConfig {
 // on every tick; one that is never checked would hide a fault: both are refused.
 enum class SupervisorConfigError : std::uint8_t {
   kOk = 0,
-  kJointRange = 1,      // joint_min >= joint_max
-  kMotorRange = 2,      // motor_min >= motor_max
-  kTorqueMax = 3,       // <= 0
-  kVelocityMax = 4,     // <= 0
-  kJointJumpMax = 5,    // <= 0
-  kStuckTravel = 6,     // <= 0
-  kStuckDuty = 7,       // <= 0
-  kMotorStuckTicks = 8  // 0
+  kJointRange = 1,       // joint_min >= joint_max
+  kMotorRange = 2,       // motor_min >= motor_max
+  kTorqueMax = 3,        // <= 0
+  kVelocityMax = 4,      // <= 0
+  kJointJumpMax = 5,     // <= 0
+  kStuckTravel = 6,      // <= 0
+  kStuckDuty = 7,        // <= 0
+  kMotorStuckTicks = 8,  // 0
+  kStuckHoldError = 9,   // <= 0
 };
 SupervisorConfigError Validate(const SupervisorConfig& config);
 
@@ -88,6 +97,7 @@ struct SupervisorInput {
   Torque torque;                  // SEA torque τ
   AngularVelocity joint_velocity;
   Duty applied_duty;  // the duty applied over the previous tick
+  Angle motor_error;  // the position loop's setpoint − θ_m behind that duty
   bool tick_overrun = false;
   // Raised by the main loop for this one tick (an event, not a condition: nothing is
   // left to clear afterwards). Only IsExternalFault() codes.

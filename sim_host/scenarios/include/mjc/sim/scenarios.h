@@ -14,6 +14,7 @@
 #include "mjc/app/joint_config.h"
 #include "mjc/host/calibration_fit.h"
 #include "mjc/host/report.h"
+#include "mjc/host/robot_description.h"
 #include "mjc/plant/params.h"
 #include "mjc/sim/sim_board.h"
 
@@ -36,10 +37,25 @@ struct CalibrationOutcome {
   std::vector<double> joint_rad;
 };
 
+// The joint a calibration is for. Without a description, as `mjc calibrate` without
+// --robot: the fit takes α = 1 and the record keeps the board's stiffness and joint
+// zero. With one, as `mjc calibrate --robot`: α from the description (or fitted within
+// ±20 % of it with fit_alpha), the description's stiffness and joint zero in the record
+// (host::UseRobotAlpha, UseRobotJoint, JointZeroShift).
+struct CalibrationJoint {
+  const host::RobotDescription* robot = nullptr;
+  bool fit_alpha = false;
+};
+
+// The paper's calibration sweep: 30° at 0.5 Hz over 10 cycles, 500 ms rests (the
+// defaults of `mjc calibrate`).
+RampedSineConfig PaperCalibrationSweep();
+
 // Runs the increasing-amplitude sweep on the robot alone (the plant must have no
 // interface), fits c_r, c_l with NLopt on the board's own θ_m, θ_j, uploads the
 // calibration and waits for the board to accept it.
-CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep);
+CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep,
+                                  const CalibrationJoint& joint = {});
 
 struct WindowOutcome {
   Motion motion = Motion::kFlexion;
@@ -108,8 +124,6 @@ InterfaceTruth TrueInterface(const plant::InterfaceParams& interface,
 inline constexpr double kPaperFrequencyHz = 0.5;
 
 SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions = 5);
-// The paper's calibration sweep on the robot alone: 0 → 30°, 0.5 Hz, ten cycles.
-RampedSineConfig PaperCalibrationSweep();
 
 struct RepeatabilityOutcome {
   std::vector<TrialOutcome> trials;
