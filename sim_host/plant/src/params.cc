@@ -119,15 +119,14 @@ class Reader {
 
  private:
   static std::string Name(std::string_view prefix, std::string_view key) {
-    return prefix.empty() ? std::string(key)
-                          : std::string(prefix) + "." + std::string(key);
+    return strict::FieldName(prefix, key);
   }
 
   const Json& Get(const Json& object, std::string_view prefix,
                   std::string_view key) const {
-    const auto it = object.find(key);
-    if (it == object.end()) FieldError(source_, Name(prefix, key), "is missing");
-    return *it;
+    const Json* v = strict::Member(object, key);
+    if (v == nullptr) FieldError(source_, Name(prefix, key), "is missing");
+    return *v;
   }
 
   std::string_view source_;

@@ -46,4 +46,16 @@ std::optional<std::string> UnknownKey(const Json& object,
   return std::nullopt;
 }
 
+// A field's dotted name in its file: "cable.alpha" (no prefix: the key alone).
+inline std::string FieldName(std::string_view prefix, std::string_view key) {
+  return prefix.empty() ? std::string(key) : std::string(prefix) + "." + std::string(key);
+}
+
+// The member `key` of `object`, or null when it has none.
+template <class Json>
+const Json* Member(const Json& object, std::string_view key) {
+  const auto it = object.find(key);
+  return it == object.end() ? nullptr : &*it;
+}
+
 }  // namespace mjc::strict
