@@ -11,6 +11,7 @@ EmergencyStopWatch::EmergencyStopWatch(gpio::EdgeInput* line, CanLink* link,
 EmergencyStopWatch::Step EmergencyStopWatch::Send(std::string* why) {
   protocol::StopAll stop;
   stop.session = config_.session;
+  if (before_send_) before_send_();
   if (!link_->Send(protocol::Encode(stop, protocol::kEveryNode), why))
     return Step::kError;
   ++sent_;
@@ -67,6 +68,12 @@ EmergencyStopThread::EmergencyStopThread(std::unique_ptr<gpio::EdgeInput> line,
       raise_(raise),
       session_(config.session),
       line_name_(line_->name()) {
+  // The flags before the frame: the board's stop can reach the tool's own link before
+  // this thread would run again after sending.
+  watch_.BeforeEachSend([this] {
+    if (raise_ != nullptr) *raise_ = true;
+    triggered_ = true;
+  });
   thread_ = std::thread([this] { Run(); });
 }
 
@@ -88,11 +95,6 @@ void EmergencyStopThread::Run() {
   EmergencyStopWatch::Step step = watch_.Start(&why);
   while (step != EmergencyStopWatch::Step::kError) {
     activations_ = watch_.activations();
-    if (step == EmergencyStopWatch::Step::kSent && !triggered_) {
-      // The flag first: whoever sees triggered() sees the tool's waits ended too.
-      if (raise_ != nullptr) *raise_ = true;
-      triggered_ = true;
-    }
     if (quit_) return;
     step = watch_.Poll(kWait, &why);
   }

@@ -324,6 +324,49 @@ TEST_F(EmergencyStop, TheThreadRaisesTheToolsFlagAndStopsOnceMoreWhenTheLineFail
   EXPECT_EQ(Stops(), 1);
 }
 
+// A link that notes, at each send, whether the tool's flag was already raised.
+class FlagAtSend final : public host::CanLink {
+ public:
+  FlagAtSend(std::unique_ptr<host::CanLink> inner, const std::atomic<bool>* flag,
+             std::vector<bool>* raised)
+      : inner_(std::move(inner)), flag_(flag), raised_(raised) {}
+
+ private:
+  bool DoSend(const protocol::CanFrame& frame, std::string* why) override {
+    raised_->push_back(*flag_);
+    return inner_->Send(frame, why);
+  }
+  host::ReceiveResult DoReceive(int timeout_ms, std::string* why) override {
+    return inner_->Receive(timeout_ms, why);
+  }
+  bool DoSetFilters(std::span<const host::IdFilter> filters, std::string* why) override {
+    return inner_->SetFilters(filters, why);
+  }
+  std::unique_ptr<host::CanLink> inner_;
+  const std::atomic<bool>* flag_;
+  std::vector<bool>* raised_;
+};
+
+TEST_F(EmergencyStop, TheToolsFlagIsRaisedBeforeTheStopAllGoesOut) {
+  // A board stops within a tick of the StopAll: the tool that then sees its board
+  // stopped must already see that its emergency stop did it (not a fault of its own).
+  auto line = std::make_unique<ScriptedInput>();
+  line->level = true;
+  std::atomic<bool> flag{false};
+  std::vector<bool> raised;  // written by the thread's link, read once it has ended
+  host::EmergencyStopConfig config;
+  config.session = 0x1234;
+  {
+    host::EmergencyStopThread thread(
+        std::move(line), std::make_unique<FlagAtSend>(bus_->Connect(), &flag, &raised),
+        config, &flag);
+    while (Stops() == 0) std::this_thread::yield();
+    EXPECT_TRUE(thread.triggered());
+  }
+  ASSERT_FALSE(raised.empty());
+  EXPECT_TRUE(raised.front());
+}
+
 // --- sync line ---------------------------------------------------------------------
 
 TEST(WindowSync, EveryWindowStartIsAnEdgeRisingAtFlexions) {

@@ -64,6 +64,11 @@ class EmergencyStopWatch {
   // The kernel's time (CLOCK_MONOTONIC) of the last edge, 0 before one.
   std::chrono::nanoseconds last_edge() const { return last_edge_; }
 
+  // Called just before each StopAll goes on the bus. EmergencyStopThread raises its
+  // flags there: a board answers a StopAll within a tick, and a tool that sees its
+  // board stopped must already see why.
+  void BeforeEachSend(std::function<void()> hook) { before_send_ = std::move(hook); }
+
  private:
   Step Send(std::string* why);
 
@@ -76,11 +81,13 @@ class EmergencyStopWatch {
   std::uint64_t activations_ = 0;
   std::uint64_t sent_ = 0;
   std::chrono::nanoseconds last_edge_{0};
+  std::function<void()> before_send_;
 };
 
-// The watch on a thread of its own. Once it has sent a StopAll it stays triggered and
-// raises the flag it was given (the tool's interrupt flag, which ends its waits on its
-// boards); so does a failure of the line or the link (after a last StopAll).
+// The watch on a thread of its own. From just before its first StopAll goes out it stays
+// triggered and raises the flag it was given (the tool's interrupt flag, which ends its
+// waits on its boards); so does a failure of the line or the link (after a last
+// StopAll).
 class EmergencyStopThread {
  public:
   // Starts watching: `line` and `link` are its own. The start already sends the stop
@@ -92,7 +99,7 @@ class EmergencyStopThread {
   EmergencyStopThread(const EmergencyStopThread&) = delete;
   EmergencyStopThread& operator=(const EmergencyStopThread&) = delete;
 
-  // A StopAll went out (or the watch failed).
+  // A StopAll went out, or is going out (or the watch failed).
   bool triggered() const { return triggered_; }
   // Edges into the active level so far (EmergencyStopWatch::activations).
   std::uint64_t activations() const { return activations_; }
