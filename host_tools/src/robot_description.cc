@@ -36,93 +36,28 @@ std::string Number(double v) {
   return text;
 }
 
-// Reads one file, throwing std::runtime_error with the message the caller returns.
-class Reader {
- public:
-  explicit Reader(std::string_view source) : source_(source) {}
+using Reader = strict::FieldReader<Json>;
 
-  [[noreturn]] void Fail(std::string_view field, const std::string& what) const {
-    throw std::runtime_error(std::string(source_) + ": field '" + std::string(field) +
-                             "' " + what);
+// A number within the plausible [lo, hi] (with `unit`, for the message).
+double Plausible(const Reader& r, const Json& section, std::string_view prefix,
+                 std::string_view key, double lo, double hi, std::string_view unit) {
+  const double value = r.Double(section, prefix, key);
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    r.Fail(strict::FieldName(prefix, key),
+           "= " + Number(value) + " is outside the plausible [" + Number(lo) + ", " +
+               Number(hi) + "]" + (unit.empty() ? "" : " ") + std::string(unit));
   }
-
-  const Json& Section(const Json& root, std::string_view key,
-                      std::span<const std::string_view> known) const {
-    const Json& section = Get(root, "", key);
-    if (!section.is_object()) Fail(key, "must be an object");
-    if (const auto unknown = strict::UnknownKey(section, known, std::string(key) + ".")) {
-      throw std::runtime_error(std::string(source_) + ": " + *unknown);
-    }
-    return section;
-  }
-
-  // A number within [lo, hi] (with `unit` and why that range, for the message).
-  double Double(const Json& section, std::string_view prefix, std::string_view key,
-                double lo, double hi, std::string_view unit) const {
-    const Json& v = Get(section, prefix, key);
-    const std::string name = Name(prefix, key);
-    if (!v.is_number()) Fail(name, "must be a number");
-    const double value = v.get<double>();
-    if (!std::isfinite(value) || value < lo || value > hi) {
-      Fail(name, "= " + Number(value) + " is outside the plausible [" + Number(lo) +
-                     ", " + Number(hi) + "]" + (unit.empty() ? "" : " ") +
-                     std::string(unit));
-    }
-    return value;
-  }
-
-  std::int64_t Integer(const Json& section, std::string_view prefix, std::string_view key,
-                       std::int64_t lo, std::int64_t hi) const {
-    const Json& v = Get(section, prefix, key);
-    const std::string name = Name(prefix, key);
-    if (!v.is_number_integer()) Fail(name, "must be an integer");
-    const bool too_big =
-        v.is_number_unsigned() && v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi);
-    const std::int64_t value = too_big ? hi + 1 : v.get<std::int64_t>();
-    if (too_big || value < lo || value > hi) {
-      Fail(name, "= " + v.dump() + " is outside [" + std::to_string(lo) + ", " +
-                     std::to_string(hi) + "]");
-    }
-    return value;
-  }
-
-  std::string String(const Json& root, std::string_view key) const {
-    const Json& v = Get(root, "", key);
-    if (!v.is_string()) Fail(key, "must be a string");
-    return v.get<std::string>();
-  }
-
- private:
-  static std::string Name(std::string_view prefix, std::string_view key) {
-    return strict::FieldName(prefix, key);
-  }
-
-  const Json& Get(const Json& object, std::string_view prefix,
-                  std::string_view key) const {
-    const Json* v = strict::Member(object, key);
-    if (v == nullptr) Fail(Name(prefix, key), "is missing");
-    return *v;
-  }
-
-  std::string_view source_;
-};
+  return value;
+}
 
 RobotDescription Parse(std::string_view text, std::string_view source) {
-  Json root;
-  try {
-    root = Json::parse(text);
-  } catch (const Json::exception& e) {
-    throw std::runtime_error(std::string(source) + ": not valid JSON: " + e.what());
-  }
-  if (!root.is_object()) {
-    throw std::runtime_error(std::string(source) + ": the top level must be an object");
-  }
+  const Json root = strict::ParseObject<Json>(text, source);
   if (const auto unknown = strict::UnknownKey(root, kRobotDescriptionKeys)) {
     throw std::runtime_error(std::string(source) + ": " + *unknown);
   }
   const Reader r(source);
   RobotDescription d;
-  d.name = r.String(root, "name");
+  d.name = r.String(root, "", "name");
   const bool name_ok = !d.name.empty() && d.name.size() <= 64 &&
                        std::all_of(d.name.begin(), d.name.end(), [](char c) {
                          return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
@@ -130,23 +65,23 @@ RobotDescription Parse(std::string_view text, std::string_view source) {
                                 c == '.';
                        });
   if (!name_ok) r.Fail("name", "= \"" + d.name + "\" is not 1-64 of [A-Za-z0-9_.-]");
-  if (root.contains("description")) d.description = r.String(root, "description");
+  if (root.contains("description")) d.description = r.String(root, "", "description");
 
   // Pulleys of a finger joint: a few mm (a thumb PIP) to a few cm; outside that the
   // number is in the wrong unit (mm for m) rather than a joint.
   const Json& pulleys = r.Section(root, "pulleys", kPulleyKeys);
   d.motor_pulley_radius_m =
-      r.Double(pulleys, "pulleys", "motor_radius_m", 0.002, 0.05, "m");
+      Plausible(r, pulleys, "pulleys", "motor_radius_m", 0.002, 0.05, "m");
   d.joint_pulley_radius_m =
-      r.Double(pulleys, "pulleys", "joint_radius_m", 0.002, 0.05, "m");
+      Plausible(r, pulleys, "pulleys", "joint_radius_m", 0.002, 0.05, "m");
   const Json& springs = r.Section(root, "springs", kSpringKeys);
   d.spring_rate_N_per_m =
-      r.Double(springs, "springs", "rate_N_per_m", 100.0, 100000.0, "N/m");
+      Plausible(r, springs, "springs", "rate_N_per_m", 100.0, 100000.0, "N/m");
 
   const Json& motor = r.Section(root, "motor_encoder", kMotorEncoderKeys);
   d.motor_counts_per_rev = static_cast<std::int32_t>(
       r.Integer(motor, "motor_encoder", "counts_per_rev", 1, std::int64_t{1} << 20));
-  d.gear_ratio = r.Double(motor, "motor_encoder", "gear_ratio", 1.0, 10000.0, "");
+  d.gear_ratio = Plausible(r, motor, "motor_encoder", "gear_ratio", 1.0, 10000.0, "");
   d.motor_count_at_zero =
       static_cast<std::uint16_t>(r.Integer(motor, "motor_encoder", "count_at_zero", 0,
                                            std::numeric_limits<std::uint16_t>::max()));
@@ -165,15 +100,15 @@ RobotDescription Parse(std::string_view text, std::string_view source) {
 
   const Json& limits = r.Section(root, "limits", kLimitKeys);
   d.extension_limit_deg =
-      r.Double(limits, "limits", "extension_deg", -kBoardJointLimitDeg, 0.0, "°");
+      Plausible(r, limits, "limits", "extension_deg", -kBoardJointLimitDeg, 0.0, "°");
   d.flexion_limit_deg =
-      r.Double(limits, "limits", "flexion_deg", 0.0, kBoardJointLimitDeg, "°");
+      Plausible(r, limits, "limits", "flexion_deg", 0.0, kBoardJointLimitDeg, "°");
   if (!(d.extension_limit_deg < 0.0 && d.flexion_limit_deg > 0.0)) {
     r.Fail("limits",
            "must have extension_deg < 0 < flexion_deg (the joint at zero "
            "must be inside its travel)");
   }
-  d.torque_limit_Nm = r.Double(limits, "limits", "torque_Nm", 1e-3, 5.0, "N·m");
+  d.torque_limit_Nm = Plausible(r, limits, "limits", "torque_Nm", 1e-3, 5.0, "N·m");
 
   // What follows from the parts must be a Maestro joint too (the ranges `mjc cal`
   // warns about, calibration_io.h): a ratio or stiffness outside them is a unit slip.

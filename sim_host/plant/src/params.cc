@@ -46,91 +46,9 @@ std::string Number(double v) {
 // Reading
 // ---------------------------------------------------------------------------------------
 
-class Reader {
- public:
-  explicit Reader(std::string_view source) : source_(source) {}
-
-  // The object `key` of `parent` (prefix names the parent for messages); every key of
-  // it must be in `known`.
-  const Json& Section(const Json& parent, std::string_view key,
-                      std::span<const std::string_view> known) const {
-    const Json& section = Get(parent, "", key);
-    if (!section.is_object()) FieldError(source_, key, "must be an object");
-    CheckKnown(section, std::string(key) + ".", known);
-    return section;
-  }
-
-  void CheckKnown(const Json& object, const std::string& prefix,
-                  std::span<const std::string_view> known) const {
-    // The policy of every loader (mjc/strict_json.h): named, with its nearest match.
-    if (const auto unknown = strict::UnknownKey(object, known, prefix)) {
-      throw std::runtime_error(std::string(source_) + ": " + *unknown);
-    }
-  }
-
-  double Double(const Json& section, std::string_view prefix,
-                std::string_view key) const {
-    const Json& v = Get(section, prefix, key);
-    if (!v.is_number()) FieldError(source_, Name(prefix, key), "must be a number");
-    return v.get<double>();
-  }
-
-  std::int64_t Integer(const Json& section, std::string_view prefix, std::string_view key,
-                       std::int64_t lo, std::int64_t hi) const {
-    const Json& v = Get(section, prefix, key);
-    if (!v.is_number_integer()) {
-      FieldError(source_, Name(prefix, key), "must be an integer");
-    }
-    const std::string range =
-        " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-    if (v.is_number_unsigned() &&
-        v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi)) {
-      FieldError(source_, Name(prefix, key),
-                 "= " + std::to_string(v.get<std::uint64_t>()) + range);
-    }
-    const auto value = v.get<std::int64_t>();
-    if (value < lo || value > hi) {
-      FieldError(source_, Name(prefix, key), "= " + std::to_string(value) + range);
-    }
-    return value;
-  }
-
-  std::uint64_t Unsigned64(const Json& section, std::string_view prefix,
-                           std::string_view key) const {
-    const Json& v = Get(section, prefix, key);
-    if (!v.is_number_unsigned()) {
-      FieldError(source_, Name(prefix, key), "must be a non-negative integer");
-    }
-    return v.get<std::uint64_t>();
-  }
-
-  bool Bool(const Json& section, std::string_view prefix, std::string_view key) const {
-    const Json& v = Get(section, prefix, key);
-    if (!v.is_boolean()) FieldError(source_, Name(prefix, key), "must be true or false");
-    return v.get<bool>();
-  }
-
-  std::string String(const Json& section, std::string_view prefix,
-                     std::string_view key) const {
-    const Json& v = Get(section, prefix, key);
-    if (!v.is_string()) FieldError(source_, Name(prefix, key), "must be a string");
-    return v.get<std::string>();
-  }
-
- private:
-  static std::string Name(std::string_view prefix, std::string_view key) {
-    return strict::FieldName(prefix, key);
-  }
-
-  const Json& Get(const Json& object, std::string_view prefix,
-                  std::string_view key) const {
-    const Json* v = strict::Member(object, key);
-    if (v == nullptr) FieldError(source_, Name(prefix, key), "is missing");
-    return *v;
-  }
-
-  std::string_view source_;
-};
+// The fields' reader every strict loader shares (mjc/strict_json.h); its messages are
+// FieldError's.
+using Reader = strict::FieldReader<Json>;
 
 const char* ModelName(InterfaceModel model) {
   return model == InterfaceModel::kKelvinVoigt ? "kelvin_voigt" : "standard_linear_solid";
@@ -335,17 +253,7 @@ void ValidatePlantParams(const PlantParams& p, std::string_view source) {
 }
 
 PlantParams ParsePlantParams(std::string_view json_text, std::string_view source) {
-  Json root;
-  try {
-    root = Json::parse(json_text);
-  } catch (const Json::exception& e) {
-    // Syntax errors, and numbers a double cannot hold (out_of_range): both are files
-    // the board's parameters cannot come from.
-    throw std::runtime_error(std::string(source) + ": not valid JSON: " + e.what());
-  }
-  if (!root.is_object()) {
-    throw std::runtime_error(std::string(source) + ": the top level must be an object");
-  }
+  const Json root = strict::ParseObject<Json>(json_text, source);
   const Reader r(source);
   const auto sections = Sections();
   std::vector<std::string_view> top = {"name", "description"};
