@@ -29,6 +29,20 @@ set(MJC_QEMU_MPS2_COMMAND
 set(MJC_HEAP_SYMBOLS malloc _malloc_r calloc _calloc_r realloc _realloc_r _sbrk _sbrk_r
     _Znwj _Znaj _ZnwjRKSt9nothrow_t _ZnajRKSt9nothrow_t _ZnwjSt11align_val_t)
 
+# mjc_check_image(<target> [FORBIDDEN <symbol>...] [REPORT <symbol>...])
+#
+# After <target> links (cmake/check_image.cmake): its size report (printed, and
+# <target>.elf.size.txt), a failed build when it defines or references a FORBIDDEN
+# symbol, and the values of the REPORT symbols printed.
+function(mjc_check_image target)
+  cmake_parse_arguments(ARG "" "" "FORBIDDEN;REPORT" ${ARGN})
+  add_custom_command(TARGET ${target} POST_BUILD
+    COMMAND ${CMAKE_COMMAND} -DELF=$<TARGET_FILE:${target}> -DNM=${CMAKE_NM}
+            -DSIZE=${CMAKE_SIZE} "-DFORBIDDEN=${ARG_FORBIDDEN}" "-DREPORT=${ARG_REPORT}"
+            -P ${PROJECT_SOURCE_DIR}/cmake/check_image.cmake
+    VERBATIM)
+endfunction()
+
 # mjc_add_cm4_image(<name> SOURCES <src>... [LIBS <lib>...] [STDIO] [NO_HEAP] [NO_DOUBLE]
 #                   [SCRIPT <linker script>])
 #
@@ -68,16 +82,7 @@ function(mjc_add_cm4_image name)
     list(APPEND forbidden __aeabi_dadd __aeabi_dsub __aeabi_dmul __aeabi_ddiv __aeabi_f2d
          __aeabi_i2d __aeabi_d2iz __aeabi_l2d __aeabi_d2lz)
   endif()
-  add_custom_command(TARGET ${name} POST_BUILD
-    COMMAND ${CMAKE_COMMAND} -DELF=$<TARGET_FILE:${name}> -DNM=${CMAKE_NM}
-            -DSIZE=${CMAKE_SIZE} "-DFORBIDDEN=${forbidden}"
-            -P ${PROJECT_SOURCE_DIR}/cmake/check_image.cmake
-    VERBATIM)
-  if(ARG_APP_IMAGE)
-    mjc_package_app_image(${name} OUTPUT ${ARG_APP_IMAGE} BIN
-      $<TARGET_FILE_DIR:${name}>/${name}.bin BOARD_TYPE ${ARG_BOARD_TYPE}
-      HARDWARE ${ARG_HARDWARE})
-  endif()
+  mjc_check_image(${name} FORBIDDEN ${forbidden})
 endfunction()
 
 # mjc_package_app_image(<target> OUTPUT <file> BIN <raw image> BOARD_TYPE <n>
@@ -156,11 +161,8 @@ function(mjc_add_g474_image name)
             $<TARGET_FILE_DIR:${name}>/${name}.bin
     COMMAND ${CMAKE_OBJCOPY} -O ihex $<TARGET_FILE:${name}>
             $<TARGET_FILE_DIR:${name}>/${name}.hex
-    COMMAND ${CMAKE_COMMAND} -DELF=$<TARGET_FILE:${name}> -DNM=${CMAKE_NM}
-            -DSIZE=${CMAKE_SIZE} "-DFORBIDDEN=${forbidden}"
-            "-DREPORT=${report}"
-            -P ${PROJECT_SOURCE_DIR}/cmake/check_image.cmake
     VERBATIM)
+  mjc_check_image(${name} FORBIDDEN ${forbidden} REPORT ${report})
   if(ARG_APP_IMAGE)
     mjc_package_app_image(${name} OUTPUT ${ARG_APP_IMAGE} BIN
       $<TARGET_FILE_DIR:${name}>/${name}.bin BOARD_TYPE ${ARG_BOARD_TYPE}

@@ -3,6 +3,10 @@
 // Wireshark and python-can) or a CSV of every decoded signal in physical units (one row
 // a signal). A recorded log is read line by line (host/candump.h): a line that is not
 // candump's format is counted and skipped, and the command then fails naming the first.
+// Batched angle telemetry (TelemetryAngleBatch, CAN FD) becomes one TelemetryAngles row
+// pair a sample in the CSV, with its sample number; a gap in a node's sample count (a
+// lost frame) is counted and reported at the end, never filled in.
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -15,6 +19,7 @@
 #include <utility>
 
 #include "commands.h"
+#include "mjc/host/board_client.h"
 #include "mjc/host/can_link.h"
 #include "mjc/host/candump.h"
 #include "mjc/protocol/codec.h"
@@ -51,7 +56,7 @@ bool WriteSignals(std::FILE* out, std::int64_t us, const CanFrame& f) {
         ((std::fprintf(
              out, "%s,%03X,%u,%s,%s,%.12g\n", Seconds(us).c_str(), f.id, NodeOf(f.id),
              Message<M>::kName, s.name,
-             static_cast<double>(std::decay_t<decltype(s)>::Wire::ToRaw(m.*(s.member))) *
+             static_cast<double>(std::decay_t<decltype(s)>::Wire::ToRaw(s.Get(m))) *
                  s.factor())),
          ...);
       },
@@ -59,7 +64,55 @@ bool WriteSignals(std::FILE* out, std::int64_t us, const CanFrame& f) {
   return true;
 }
 
+// The batch as the per-sample stream classical frames give: a TelemetryAngles row pair
+// a sample, each after its sample number.
+bool WriteBatch(std::FILE* out, std::int64_t us, const CanFrame& f) {
+  using protocol::TelemetryAngleBatch;
+  TelemetryAngleBatch b;
+  if (FunctionOf(f.id) !=
+          static_cast<std::uint8_t>(Message<TelemetryAngleBatch>::kFunction) ||
+      Decode(f, &b) != DecodeError::kOk) {
+    return false;  // a malformed one: WriteSignals says so
+  }
+  const std::string time = Seconds(us);
+  const char* name = Message<protocol::TelemetryAngles>::kName;
+  for (std::size_t i = 0; i < TelemetryAngleBatch::kSamples; ++i) {
+    std::fprintf(out, "%s,%03X,%u,%s,sample,%llu\n", time.c_str(), f.id, NodeOf(f.id),
+                 name, static_cast<unsigned long long>(b.first_sample) + i);
+    std::fprintf(out, "%s,%03X,%u,%s,motor_angle_rad,%.12g\n", time.c_str(), f.id,
+                 NodeOf(f.id), name, b.motor[i].ToDouble());
+    std::fprintf(out, "%s,%03X,%u,%s,joint_angle_rad,%.12g\n", time.c_str(), f.id,
+                 NodeOf(f.id), name, b.joint[i].ToDouble());
+  }
+  return true;
+}
+
+// Every node's batched angle telemetry, for the gaps in its sample count.
+class AngleGaps {
+ public:
+  void Take(const CanFrame& f) {
+    protocol::TelemetryAngleBatch b;
+    if (Decode(f, &b) == DecodeError::kOk) nodes_[NodeOf(f.id)].OnBatch(b);
+  }
+  // ", N angle frame(s) lost (...)" when a node's count had gaps; empty otherwise.
+  std::string Summary() const {
+    std::string lost;
+    for (std::size_t node = 0; node < nodes_.size(); ++node) {
+      const host::AngleSequence& s = nodes_[node];
+      if (s.lost_frames() == 0) continue;
+      lost += (lost.empty() ? "" : ", ") + std::string("node ") + std::to_string(node) +
+              ": " + std::to_string(s.lost_frames()) + " (" +
+              std::to_string(s.lost_samples()) + " samples)";
+    }
+    return lost.empty() ? "" : "; batched angle frames lost (gaps in the count): " + lost;
+  }
+
+ private:
+  std::array<host::AngleSequence, 16> nodes_;
+};
+
 void WriteCsv(std::FILE* out, std::int64_t us, const CanFrame& f) {
+  if (WriteBatch(out, us, f)) return;
   bool known = false;
   std::apply(
       [&](auto... m) { ((known = known || WriteSignals<decltype(m)>(out, us, f)), ...); },
@@ -131,6 +184,7 @@ void RecordBus(const Options& o) {
       std::chrono::steady_clock::now() + std::chrono::duration<double>(o.seconds);
   long written = 0;
   bool link_failed = false;
+  AngleGaps gaps;
   const auto done = [&] {
     return link_failed || out.failed() || (o.frames > 0 && written >= o.frames);
   };
@@ -139,6 +193,7 @@ void RecordBus(const Options& o) {
     const auto r = link->Receive(timeout_ms, &why);
     link_failed = r.status == host::ReceiveStatus::kError;
     if (!r) return false;
+    gaps.Take(r->frame);
     if (o.format == "csv") {
       WriteCsv(out.file(), r->timestamp_us, r->frame);
     } else {
@@ -166,8 +221,9 @@ void RecordBus(const Options& o) {
   }
   while (stop && !done() && record(0)) {
   }
-  std::fprintf(stderr, "mjc log: %ld frames, %llu dropped by the kernel\n", written,
-               static_cast<unsigned long long>(link->stats().rx_dropped));
+  std::fprintf(stderr, "mjc log: %ld frames, %llu dropped by the kernel%s\n", written,
+               static_cast<unsigned long long>(link->stats().rx_dropped),
+               gaps.Summary().c_str());
   out.Close();
   if (link_failed) throw Failure(why);
 }
@@ -183,6 +239,7 @@ void DecodeLog(const Options& o) {
   Output out(o.out_path);
   if (o.format == "csv") std::fputs("time_s,id,node,message,signal,value\n", out.file());
   long number = 0, written = 0, malformed = 0, other_iface = 0, not_ours = 0;
+  AngleGaps gaps;
   std::string first_malformed;
   const std::atomic<bool>& stop = StopOnSignals();
   for (std::string text; !stop && !out.failed() &&
@@ -200,8 +257,9 @@ void DecodeLog(const Options& o) {
       ++other_iface;
       continue;
     }
+    const auto frame = host::ToProtocolFrame(*line);
+    if (frame) gaps.Take(*frame);
     if (o.format == "csv") {
-      const auto frame = host::ToProtocolFrame(*line);
       if (!frame) {
         ++not_ours;
         continue;
@@ -221,7 +279,7 @@ void DecodeLog(const Options& o) {
     counts += ", " + std::to_string(not_ours) +
               " remote, error or 29-bit frames skipped (not the protocol's)";
   }
-  std::fprintf(stderr, "%s\n", counts.c_str());
+  std::fprintf(stderr, "%s%s\n", counts.c_str(), gaps.Summary().c_str());
   out.Close();
   if (malformed > 0) {
     throw Failure(name + ": " + std::to_string(malformed) +

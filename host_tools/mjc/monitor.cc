@@ -135,6 +135,7 @@ void AddMonitor(CLI::App& app) {
             j["torque_Nm"] = s.torque_Nm;
             j["power_W"] = s.power_W;
             j["energy_J"] = s.energy_J;
+            j["angle_frames_lost"] = b.angle_sequence().lost_frames();
           }
           if (const auto& info = b.info()) {
             j["build"] = host::BuildName(info->build, info->dirty);
@@ -159,12 +160,16 @@ void AddMonitor(CLI::App& app) {
         }
         const std::string fault =
             s.fault == Fault::kNone ? "" : "  fault " + host::DescribeFault(s.fault);
+        const std::uint64_t lost = b.angle_sequence().lost_frames();
+        const std::string lost_text =
+            lost == 0 ? "" : "  " + std::to_string(lost) + " angle frame(s) lost";
         std::printf(
             "%s node %d: %-11s %-12s θm %+8.4f rad  θj %+8.4f rad  τ %+7.4f N·m  "
-            "P %+8.3f mW  E %9.3f mJ%s\n",
+            "P %+8.3f mW  E %9.3f mJ%s%s\n",
             stamp.c_str(), nodes[i], std::string(host::StateName(s.state)).c_str(),
             s.calibrated ? "calibrated" : "uncalibrated", s.motor_rad, s.joint_rad,
-            s.torque_Nm, s.power_W * 1e3, s.energy_J * 1e3, fault.c_str());
+            s.torque_Nm, s.power_W * 1e3, s.energy_J * 1e3, fault.c_str(),
+            lost_text.c_str());
       }
       const host::LinkStats& bus = links.front()->stats();
       if (bus.error_frames > 0) {

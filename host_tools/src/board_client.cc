@@ -292,6 +292,24 @@ std::vector<BoardWindow> BoardClient::TakeWindows() {
   return out;
 }
 
+void AngleSequence::OnBatch(const protocol::TelemetryAngleBatch& batch) {
+  constexpr auto kSamples =
+      static_cast<std::uint32_t>(protocol::TelemetryAngleBatch::kSamples);
+  ++batches_;
+  // Modulo 2^32, as the board counts: half the range ahead is a gap, behind a restart.
+  const std::uint32_t gap = batch.first_sample - next_;
+  if (started_ && gap != 0) {
+    if (gap < 0x80000000u) {
+      lost_samples_ += gap;
+      lost_frames_ += (gap + kSamples - 1) / kSamples;
+    } else {
+      ++restarts_;
+    }
+  }
+  started_ = true;
+  next_ = batch.first_sample + kSamples;
+}
+
 std::vector<AngleSample> BoardClient::TakeAngles() {
   std::vector<AngleSample> out;
   out.swap(angles_);
@@ -367,6 +385,17 @@ void BoardClient::Handle(const CanFrame& f) {
       if (ok(Decode(f, &a))) {
         status_.motor_rad = a.motor.ToDouble();
         status_.joint_rad = a.joint.ToDouble();
+        if (keep_angles_) angles_.push_back({status_.motor_rad, status_.joint_rad});
+      }
+      return;
+    }
+    case Function::kTelemetryAngleBatch: {
+      protocol::TelemetryAngleBatch b;
+      if (!ok(Decode(f, &b))) return;
+      angle_sequence_.OnBatch(b);
+      for (std::size_t i = 0; i < b.motor.size(); ++i) {
+        status_.motor_rad = b.motor[i].ToDouble();
+        status_.joint_rad = b.joint[i].ToDouble();
         if (keep_angles_) angles_.push_back({status_.motor_rad, status_.joint_rad});
       }
       return;

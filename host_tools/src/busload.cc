@@ -30,8 +30,22 @@ constexpr double kHostHeartbeatHz = 1000.0 / kHostHeartbeatPeriod.count();
 
 }  // namespace
 
-BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards,
-                       const BusTiming& t) {
+AngleLayout LinkLayout(const BusTiming& t) {
+  return t.fd ? AngleLayout::kBatched : AngleLayout::kSingle;
+}
+
+double AngleFrameS(AngleLayout layout, const BusTiming& t) {
+  using protocol::Message;
+  using protocol::TelemetryAngleBatch;
+  if (layout == AngleLayout::kSingle) {
+    return FrameTimeS(Message<protocol::TelemetryAngles>::kLength, t);
+  }
+  return FrameTimeS(Message<TelemetryAngleBatch>::kLength, t) /
+         static_cast<double>(TelemetryAngleBatch::kSamples);
+}
+
+BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards, const BusTiming& t,
+                       AngleLayout layout) {
   BusLoad load;
   auto add = [&]<class M>(M, double hz, const char* suffix = "") {
     const int bytes = protocol::Message<M>::kLength;
@@ -40,7 +54,12 @@ BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards,
     load.total_fraction += line.load_fraction;
     load.lines.push_back(line);
   };
-  add(protocol::TelemetryAngles{}, r.angles_hz);
+  if (layout == AngleLayout::kBatched) {
+    add(protocol::TelemetryAngleBatch{},
+        r.angles_hz / static_cast<double>(protocol::TelemetryAngleBatch::kSamples));
+  } else {
+    add(protocol::TelemetryAngles{}, r.angles_hz);
+  }
   add(protocol::TelemetryTorque{}, r.torque_hz);
   add(protocol::TelemetryPower{}, r.power_hz);
   add(protocol::TelemetryEnergy{}, r.energy_hz);
@@ -60,22 +79,23 @@ BusLoad ComputeBusLoad(const protocol::TelemetryRates& r, int boards,
 }
 
 double MaxTelemetryHz(protocol::TelemetryRates rates, int boards, const BusTiming& timing,
-                      double budget) {
+                      double budget, AngleLayout layout) {
   rates.angles_hz = 0;
-  const double rest = ComputeBusLoad(rates, boards, timing).total_fraction;
+  const double rest = ComputeBusLoad(rates, boards, timing, layout).total_fraction;
   if (rest >= budget) return 0;
-  return (budget - rest) /
-         (boards *
-          FrameTimeS(protocol::Message<protocol::TelemetryAngles>::kLength, timing));
+  return (budget - rest) / (boards * AngleFrameS(layout, timing));
 }
 
-std::string FormatBusLoad(const BusLoad& load, const BusTiming& t, int boards) {
-  char line[160];
+std::string FormatBusLoad(const BusLoad& load, const BusTiming& t, int boards,
+                          AngleLayout layout) {
+  char line[200];
   std::string out;
   if (t.fd) {
     std::snprintf(line, sizeof line,
-                  "CAN FD %.0f/%.0f kbit/s, %d boards, worst-case stuffing\n",
-                  t.nominal_bps / 1e3, t.data_bps / 1e3, boards);
+                  "CAN FD %.0f/%.0f kbit/s, %d boards, worst-case stuffing, %s\n",
+                  t.nominal_bps / 1e3, t.data_bps / 1e3, boards,
+                  layout == AngleLayout::kBatched ? "angles batched (TelemetryAngleBatch)"
+                                                  : "one angle sample a frame");
   } else {
     std::snprintf(line, sizeof line,
                   "classical CAN %.0f kbit/s, %d boards, worst-case stuffing\n",
@@ -101,9 +121,17 @@ std::string BusLoadReport(int boards, double nominal_bps, double data_bps) {
   const protocol::TelemetryRates defaults;
   const BusTiming fd{true, nominal_bps, data_bps};
   const BusTiming classic{false, nominal_bps, nominal_bps};
+  // What the boards send: batches on CAN FD, single samples on classical CAN.
   std::string out = FormatBusLoad(ComputeBusLoad(defaults, boards, fd), fd, boards);
   out += FormatBusLoad(ComputeBusLoad(defaults, boards, classic), classic, boards);
-  char line[120];
+  char line[200];
+  // The FD bus with the classical layout, for comparison: what batching saves.
+  std::snprintf(
+      line, sizeof line,
+      "one angle sample a frame on CAN FD (the classical layout) would load "
+      "%.2f%%\n",
+      100.0 * ComputeBusLoad(defaults, boards, fd, AngleLayout::kSingle).total_fraction);
+  out += line;
   std::snprintf(
       line, sizeof line,
       "highest angle-telemetry rate within 50%%: FD %.0f Hz, classical %.0f Hz\n",

@@ -328,19 +328,30 @@ BacklashFit FitBacklash(std::span<const double> motor_rad,
     upper.push_back(options.max_lag_s);
   }
 
+  // Each stage: the cost over the record sampled every `stride`th sample, and an
+  // optimiser over the legal box.
+  const auto stage_objective = [&](std::span<const double> motor,
+                                   std::span<const double> joint, std::size_t stride) {
+    Objective objective(motor, joint, fit_alpha, options.alpha, &fit.evaluations);
+    objective.fit_lag = fit_lag;
+    objective.sample_period_s = period * static_cast<double>(stride);
+    return objective;
+  };
+  const auto stage_optimiser = [&](nlopt::algorithm algorithm, int max_evaluations) {
+    nlopt::opt optimiser(algorithm, static_cast<unsigned>(dimension));
+    optimiser.set_lower_bounds(lower);
+    optimiser.set_upper_bounds(upper);
+    optimiser.set_maxeval(max_evaluations);
+    return optimiser;
+  };
+
   // Global stage: DIRECT-L over the whole legal box on a decimated copy. Its job is the
   // basin, not the digits, so a coarse stride costs nothing in the result.
   const std::size_t global_stride = CeilDiv(n, options.global_max_samples);
   const std::vector<double> global_motor = Decimate(motor_rad, global_stride);
   const std::vector<double> global_joint = Decimate(joint_rad, global_stride);
-  Objective global(global_motor, global_joint, fit_alpha, options.alpha,
-                   &fit.evaluations);
-  global.fit_lag = fit_lag;
-  global.sample_period_s = period * static_cast<double>(global_stride);
-  nlopt::opt direct(nlopt::GN_DIRECT_L, static_cast<unsigned>(dimension));
-  direct.set_lower_bounds(lower);
-  direct.set_upper_bounds(upper);
-  direct.set_maxeval(options.global_max_evaluations);
+  Objective global = stage_objective(global_motor, global_joint, global_stride);
+  nlopt::opt direct = stage_optimiser(nlopt::GN_DIRECT_L, options.global_max_evaluations);
   std::vector<double> middle(dimension);
   for (std::size_t i = 0; i < dimension; ++i) middle[i] = 0.5 * (lower[i] + upper[i]);
   const StageResult coarse = RunStage(direct, global, middle);
@@ -367,13 +378,8 @@ BacklashFit FitBacklash(std::span<const double> motor_rad,
     motor = local_motor;
     joint = local_joint;
   }
-  Objective local(motor, joint, fit_alpha, options.alpha, &fit.evaluations);
-  local.fit_lag = fit_lag;
-  local.sample_period_s = period * static_cast<double>(stride);
-  nlopt::opt bobyqa(nlopt::LN_BOBYQA, static_cast<unsigned>(dimension));
-  bobyqa.set_lower_bounds(lower);
-  bobyqa.set_upper_bounds(upper);
-  bobyqa.set_maxeval(options.local_max_evaluations);
+  Objective local = stage_objective(motor, joint, stride);
+  nlopt::opt bobyqa = stage_optimiser(nlopt::LN_BOBYQA, options.local_max_evaluations);
   // Steps and tolerances in the optimiser's coordinates: s moves c_r by (max − c_l)·ds.
   const double right_lever = std::max(kMaxOffsetRad - coarse.x[0], 1e-3);
   // ~0.3°: BOBYQA's first trust region around the global stage's best point, which

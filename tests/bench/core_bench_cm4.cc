@@ -3,17 +3,14 @@
 // between mjc_bench_begin and mjc_bench_end; the "baseline" entry (an empty body)
 // measures the markers' own cost, which the script subtracts. Built NO_HEAP and
 // NO_DOUBLE: it is also the link-time proof that the core needs neither.
+#include "bench_cm4.h"
 #include "core_kernels.h"
 #include "mjc/app/can_node.h"
 #include "mjc/core/control_tick.h"
 #include "mjc/core/position_loop.h"
-#include "semihost.h"
 
 extern "C" {
 extern std::uint32_t __stack_limit[];
-// Not inlined and not empty to the optimiser, so their addresses bracket each run.
-__attribute__((noinline)) void mjc_bench_begin() { asm volatile("" ::: "memory"); }
-__attribute__((noinline)) void mjc_bench_end() { asm volatile("" ::: "memory"); }
 }
 
 namespace {
@@ -104,13 +101,8 @@ void FrameSetpoint() { g_node.HandleFrame(g_frames[2]); }
 void FrameParamRead() { g_node.HandleFrame(g_frames[3]); }
 void PollAllDue() { g_node.Poll(); }
 
-struct Entry {
-  const char* name;
-  void (*run)();
-};
-
 // Names are stable: ./bench prints each as "<name>_cm4: <count> instructions".
-constexpr Entry kEntries[] = {
+constexpr bench::Entry kEntries[] = {
     {"baseline", Baseline},
     {"fixed_mul", FixedMul},
     {"spring_torque", SpringTorque},
@@ -207,13 +199,8 @@ int main() {
   std::uint32_t top_of_main = 0;
   SetUp();
   PaintStack();
-  for (const Entry& e : kEntries) {
-    qemu::SemihostWrite("bench: ");
-    qemu::SemihostWrite(e.name);
-    qemu::SemihostWrite("\n");
-    mjc_bench_begin();
-    e.run();
-    mjc_bench_end();
+  for (const bench::Entry& e : kEntries) {
+    bench::Measure(e);
     DrainTx();
   }
   // A thousand more ticks (several window completions) for the high-water mark.

@@ -11,19 +11,15 @@
 // there. joint_io_write therefore includes that wait.
 #include <cstdint>
 
+#include "bench_cm4.h"
 #include "g474_ram_blocks.h"
 #include "hal/stm32g4/joint_io.h"
-#include "semihost.h"
-
-extern "C" {
-__attribute__((noinline)) void mjc_bench_begin() { asm volatile("" ::: "memory"); }
-__attribute__((noinline)) void mjc_bench_end() { asm volatile("" ::: "memory"); }
-}
 
 namespace {
 
 using namespace mjc;
 using namespace mjc::stm32g4;
+using bench::Entry;
 using bench::kRamBlocks;
 using bench::Reg;
 
@@ -48,10 +44,6 @@ void Read() {
 void WriteRunning() { g_io.ISR_Write(g_run); }
 void WriteStopped() { g_io.ISR_Write(g_stop); }
 
-struct Entry {
-  const char* name;
-  void (*run)();
-};
 constexpr Entry kEntries[] = {
     {"baseline", Baseline},
     {"joint_io_read", Read},
@@ -72,12 +64,7 @@ int main() {
     Reg(kRamBlocks.cycle_counter + dwt::kCyccnt) =
         Reg(kRamBlocks.cycle_counter + dwt::kCyccnt) + 1000;
     Reg(kRamBlocks.joint_spi + spi1::kSr) = spi1::sr::kRxne.Bit();
-    qemu::SemihostWrite("bench: ");
-    qemu::SemihostWrite(e.name);
-    qemu::SemihostWrite("\n");
-    mjc_bench_begin();
-    e.run();
-    mjc_bench_end();
+    bench::Measure(e);
   }
   return 0;
 }

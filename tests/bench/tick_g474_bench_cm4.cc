@@ -22,22 +22,18 @@
 // Both add a few dozen instructions to the chip's count at most.
 #include <cstdint>
 
+#include "bench_cm4.h"
 #include "g474_ram_blocks.h"
 #include "hal/stm32g4/joint_io.h"
 #include "mjc/app/joint_board.h"
 #include "mjc/app/joint_config.h"
 #include "mjc/core/encoder.h"
-#include "semihost.h"
-
-extern "C" {
-__attribute__((noinline)) void mjc_bench_begin() { asm volatile("" ::: "memory"); }
-__attribute__((noinline)) void mjc_bench_end() { asm volatile("" ::: "memory"); }
-}
 
 namespace {
 
 using namespace mjc;
 using namespace mjc::stm32g4;
+using bench::Announce;
 using bench::kRamBlocks;
 using bench::Reg;
 
@@ -94,12 +90,6 @@ void Step() {
   Sense(g_board.app().last().telemetry.setpoint);
   Tick();
   MainLoop();
-}
-
-void Announce(const char* name) {
-  qemu::SemihostWrite("bench: ");
-  qemu::SemihostWrite(name);
-  qemu::SemihostWrite("\n");
 }
 
 }  // namespace

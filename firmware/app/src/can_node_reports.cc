@@ -75,9 +75,7 @@ void CanNode::SendTelemetry(const JointApp::Snapshot& last) {
   const Telemetry& t = last.telemetry;
   const std::uint32_t now = clock_.ticks();
   const std::uint32_t hz = tick_hz();
-  if (angles_.Due(now, config_.rates.angles_hz, hz)) {
-    Send(protocol::TelemetryAngles{t.motor, t.joint});
-  }
+  if (angles_.Due(now, config_.rates.angles_hz, hz)) SendAngles(t);
   if (torque_.Due(now, config_.rates.torque_hz, hz)) {
     Send(protocol::TelemetryTorque{t.torque, t.cable_side});
   }
@@ -100,6 +98,17 @@ void CanNode::SendTelemetry(const JointApp::Snapshot& last) {
     h.tick = now;
     Send(h);
   }
+}
+
+void CanNode::SendAngles(const Telemetry& t) {
+  if (!config_.fd) return Send(protocol::TelemetryAngles{t.motor, t.joint});
+  batch_.motor[batch_fill_] = t.motor;
+  batch_.joint[batch_fill_] = t.joint;
+  if (++batch_fill_ < protocol::TelemetryAngleBatch::kSamples) return;
+  // A batch the transmit queue drops still advances the count: the host sees the gap.
+  Send(batch_);
+  batch_.first_sample += protocol::TelemetryAngleBatch::kSamples;
+  batch_fill_ = 0;
 }
 
 }  // namespace mjc::app

@@ -160,6 +160,7 @@ void Run(const RunOptions& options) {
   app::JointBoardConfig config{
       app::DefaultJointConfig(), {}, CalibrationPage(), CalibrationPage() + 1};
   config.can.node = node;
+  config.can.fd = true;  // FDCAN runs CAN FD with bit-rate switching (stm32g4/fdcan.h)
   if (options.host_timeout_ms) config.can.host_timeout_ms = *options.host_timeout_ms;
   config.can.identity.build = header ? header->commit : build::kCommit;
   config.can.identity.dirty = header ? header->dirty : build::kDirty;

@@ -18,8 +18,9 @@
 // next boot reports the crash (Startup().crashed). If even that fails (a fault while
 // stacking onto an overflowed interrupt stack locks the core up), the watchdog resets
 // the chip within 100 ms.
+#include "hal/stm32g4/startup.h"
+
 #include <cstdint>
-#include <cstring>
 
 #include "board.h"
 #include "hal/stm32g4/mmio.h"
@@ -44,17 +45,6 @@ extern const std::uint8_t __calibration_start[];
 extern mjc::boot::BootHandoff __boot_handoff;
 
 void __libc_init_array();
-void _init() {}
-void _fini() {}
-void* __dso_handle = &__dso_handle;
-
-// Firmware objects live for the whole run (main never returns): their destructors are
-// never registered. Without this, each global with a destructor would pull in newlib's
-// __cxa_atexit, which allocates.
-int __aeabi_atexit(void* /*object*/, void (* /*destructor*/)(void*), void* /*dso*/) {
-  return 0;
-}
-
 int main();
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void StartUp();
@@ -62,14 +52,6 @@ int main();
 }
 
 namespace mjc::board {
-namespace {
-
-std::size_t Bytes(const std::uint32_t* begin, const std::uint32_t* end) {
-  return static_cast<std::size_t>(reinterpret_cast<std::uintptr_t>(end) -
-                                  reinterpret_cast<std::uintptr_t>(begin));
-}
-
-}  // namespace
 
 std::uint32_t CalibrationAddress() {
   return static_cast<std::uint32_t>(
@@ -84,15 +66,6 @@ using mjc::stm32g4::Address;
 using mjc::stm32g4::Read32;
 using mjc::stm32g4::Write32;
 
-// No heap, so nothing is ever deleted. The vtables of polymorphic classes (hal::CanPort,
-// hal::Flash) still name their deleting destructors, which call operator delete; these
-// definitions keep libstdc++'s (and with it free() and the allocator) out of the image,
-// and stop the board should one ever be reached.
-void operator delete(void* /*pointer*/) noexcept { DefaultHandler(); }
-void operator delete(void* /*pointer*/, std::size_t /*bytes*/) noexcept {
-  DefaultHandler();
-}
-
 // Naked: no prologue may touch the stack before the stack pointers are set.
 __attribute__((naked)) void Reset_Handler() {
   asm volatile(
@@ -105,30 +78,24 @@ __attribute__((naked)) void Reset_Handler() {
 }
 
 void StartUp() {
-  namespace scb = mjc::stm32g4::scb;
-  const Address cpacr = scb::kBase + scb::kCpacr;
-  Write32(cpacr,
-          Read32(cpacr) | scb::cpacr::kCp10.Value(0b11) | scb::cpacr::kCp11.Value(0b11));
-  mjc::stm32g4::DataSyncBarrier();
-  mjc::stm32g4::InstructionSyncBarrier();
+  namespace stm32g4 = mjc::stm32g4;
+  stm32g4::EnableFpu();
+  stm32g4::CopySection(__data_start, __data_end, __data_load);
+  stm32g4::ZeroSection(__bss_start, __bss_end);
+  stm32g4::CopySection(__ccm_data_start, __ccm_data_end, __ccm_data_load);
+  stm32g4::ZeroSection(__ccm_bss_start, __ccm_bss_end);
+  stm32g4::SetVectorTable(__vector_table);
 
-  using mjc::board::Bytes;
-  std::memcpy(__data_start, __data_load, Bytes(__data_start, __data_end));
-  std::memset(__bss_start, 0, Bytes(__bss_start, __bss_end));
-  std::memcpy(__ccm_data_start, __ccm_data_load, Bytes(__ccm_data_start, __ccm_data_end));
-  std::memset(__ccm_bss_start, 0, Bytes(__ccm_bss_start, __ccm_bss_end));
-
-  Write32(scb::kBase + scb::kVtor,
-          static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(__vector_table)));
   // Usage, bus and memory-management faults get their own vectors (here all the
   // default handler) instead of escalating; divisions by zero trap.
+  namespace scb = stm32g4::scb;
   const Address shcsr = scb::kBase + scb::kShcsr;
   Write32(shcsr, Read32(shcsr) | scb::shcsr::kMemfaultena.Bit() |
                      scb::shcsr::kBusfaultena.Bit() | scb::shcsr::kUsgfaultena.Bit());
   const Address ccr = scb::kBase + scb::kCcr;
   Write32(ccr, Read32(ccr) | scb::ccr::kDiv0Trp.Bit());
-  mjc::stm32g4::DataSyncBarrier();
-  mjc::stm32g4::InstructionSyncBarrier();
+  stm32g4::DataSyncBarrier();
+  stm32g4::InstructionSyncBarrier();
 
   __libc_init_array();
   mjc::board::BringUp();
@@ -150,31 +117,12 @@ void DefaultHandler() {
 
 using mjc::board::Handler;
 
-struct VectorTable {
-  const void* initial_stack_pointer;
-  std::array<Handler, mjc::stm32g4::kVectorCount - 1> handlers;
-};
-
-namespace {
-
-constexpr mjc::stm32g4::SystemHandlers<Handler> kSystem{
-    .reset = Reset_Handler,
-    .nmi = DefaultHandler,
-    .hard_fault = DefaultHandler,
-    .mem_manage = DefaultHandler,
-    .bus_fault = DefaultHandler,
-    .usage_fault = DefaultHandler,
-    .svcall = DefaultHandler,
-    .debug_monitor = DefaultHandler,
-    .pendsv = DefaultHandler,
-    .systick = DefaultHandler,
-};
-
-}  // namespace
-
 // Position 0 the interrupt stack's top; every other position from the IRQ table.
 extern "C" __attribute__((section(".isr_vector"),
-                          used)) constinit const VectorTable kVectorTable = {
-    __interrupt_stack_top,
-    mjc::stm32g4::BuildVectorTable(kSystem, Handler{&DefaultHandler}, Handler{nullptr},
-                                   mjc::board::kDriverIrqs)};
+                          used)) constinit const mjc::stm32g4::VectorTable<Handler>
+    kVectorTable = {
+        __interrupt_stack_top,
+        mjc::stm32g4::BuildVectorTable(
+            mjc::stm32g4::ResetAndFaultHandlers(Handler{&Reset_Handler},
+                                                Handler{&DefaultHandler}),
+            Handler{&DefaultHandler}, Handler{nullptr}, mjc::board::kDriverIrqs)};

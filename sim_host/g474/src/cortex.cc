@@ -37,6 +37,26 @@ std::uint32_t Cortex::Cyccnt() const {
   return cyccnt_base_ + static_cast<std::uint32_t>(*cycles_ - cyccnt_origin_);
 }
 
+RegisterTable<Cortex> Cortex::Registers() {
+  using R = Register<Cortex>;
+  // DWT_CTRL, ICSR, VTOR and DEMCR write through code of their own (see Write), CYCCNT,
+  // AIRCR and the SHPRs read and write through it.
+  static constexpr R kTable[] = {
+      R::ReadWrite(kDwtCtrl, &Cortex::dwt_ctrl_),
+      R::Fixed(kCpuid, kCpuidValue),
+      R::Fixed(kIcsr),
+      R::ReadWrite(kVtor, &Cortex::vtor_),
+      R::ReadWrite(kScr, &Cortex::scr_, 0x16u),
+      R::ReadWrite(kCcr, &Cortex::ccr_, 0x31Bu),
+      R::Fixed(kShcsr),  // no fault handlers modelled: the fault status reads 0
+      R::Fixed(kCfsr),
+      R::Fixed(kHfsr),
+      R::ReadWrite(kCpacr, &Cortex::cpacr_, 0x00F00000u),
+      R::ReadWrite(kDemcr, &Cortex::demcr_, 0x010F07F1u),
+  };
+  return kTable;
+}
+
 bool Cortex::Read(const Access& a, std::uint32_t* v) {
   const std::uint32_t o = a.offset;
   auto bank = [&](std::uint32_t base, const std::bitset<kIrqCount>& bits) {
@@ -63,48 +83,19 @@ bool Cortex::Read(const Access& a, std::uint32_t* v) {
     return true;
   }
   switch (o) {
-    case kDwtCtrl:
-      *v = dwt_ctrl_;
-      return true;
     case kDwtCyccnt:
       *v = Cyccnt();
       return true;
-    case kCpuid:
-      *v = kCpuidValue;
-      return true;
-    case kIcsr:
-      *v = 0;
-      return true;
-    case kVtor:
-      *v = vtor_;
-      return true;
     case kAircr:
       *v = 0xFA050000u | (aircr_ & 0x8700u);
-      return true;
-    case kScr:
-      *v = scr_;
-      return true;
-    case kCcr:
-      *v = ccr_;
       return true;
     case kShpr1:
     case kShpr1 + 4:
     case kShpr1 + 8:
       *v = shpr_[(o - kShpr1) / 4];
       return true;
-    case kShcsr:
-    case kCfsr:
-    case kHfsr:
-      *v = 0;
-      return true;
-    case kCpacr:
-      *v = cpacr_;
-      return true;
-    case kDemcr:
-      *v = demcr_;
-      return true;
     default:
-      return false;
+      return ReadTableRegister(Registers(), *this, o, v);
   }
 }
 
@@ -190,33 +181,22 @@ bool Cortex::Write(const Access& a) {
       }
       return true;
     }
-    case kScr:
-      a.Apply(&scr_, 0x16u);
-      return true;
-    case kCcr:
-      a.Apply(&ccr_, 0x31Bu);
-      return true;
     case kShpr1:
     case kShpr1 + 4:
     case kShpr1 + 8:
       a.Apply(&shpr_[(o - kShpr1) / 4], 0xF0F0F0F0u);
       return true;
-    case kShcsr:
-    case kCfsr:
-    case kHfsr:
-      return true;
-    case kCpacr:
-      a.Apply(&cpacr_, 0x00F00000u);
-      return true;
+    case kCpuid:
+      return false;  // the model takes no write here: the bus reports a reserved register
     case kDemcr: {
       const std::uint32_t count = Cyccnt();
-      a.Apply(&demcr_, 0x010F07F1u);
+      WriteTableRegister(Registers(), *this, a);
       cyccnt_base_ = count;
       cyccnt_origin_ = *cycles_;
       return true;
     }
     default:
-      return false;
+      return WriteTableRegister(Registers(), *this, a);
   }
 }
 

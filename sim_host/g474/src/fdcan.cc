@@ -328,6 +328,76 @@ bool Fdcan::Receive(const CanBusFrame& in) {
   return true;
 }
 
+RegisterTable<Fdcan> Fdcan::Registers() {
+  using R = Register<Fdcan>;
+  // CCCR, TSCV, the FIFO acknowledges, TXBAR and TXBCR write through code of their
+  // own, and the status registers computed from the queues read through it (see Read
+  // and Write); ProtectedName lists the registers locked outside INIT = CCE = 1.
+  static constexpr R kTable[] = {
+      R::Fixed(0x00, 0x32141218u),  // CREL
+      R::Fixed(0x04, 0x87654321u),  // ENDN
+      R::ReadWrite(0x0C, &Fdcan::dbtp_, 0x009F1FFFu),
+      R::ReadWrite(0x10, &Fdcan::test_, 0x70u),
+      R::ReadWrite(0x14, &Fdcan::rwd_, 0xFFu),
+      R::ReadWrite(0x18, &Fdcan::cccr_),
+      R::ReadWrite(0x1C, &Fdcan::nbtp_, 0xFFFFFF7Fu),
+      R::ReadWrite(0x20, &Fdcan::tscc_, 0x000F0003u),
+      R::ReadWrite(0x28, &Fdcan::tocc_, 0xFFFF0007u),
+      R::Fixed(0x2C, 0xFFFF),  // TOCV
+      R::ReadWrite(0x48, &Fdcan::tdcr_, 0x7F7Fu),
+      R::ClearByWriting1(0x50, &Fdcan::ir_, 0x00FFFFFFu),
+      R::ReadWrite(0x54, &Fdcan::ie_, 0x00FFFFFFu),
+      R::ReadWrite(0x58, &Fdcan::ils_, 0x7Fu),
+      R::ReadWrite(0x5C, &Fdcan::ile_, 3u),
+      R::ReadWrite(0x80, &Fdcan::rxgfc_, 0x0F1F033Fu),
+      R::ReadWrite(0x84, &Fdcan::xidam_, 0x1FFFFFFFu),
+      R::ReadOnly(0x88, &Fdcan::hpms_),
+      R::Fixed(0x94),  // RXF0A
+      R::Fixed(0x9C),  // RXF1A
+      R::ReadWrite(0xC0, &Fdcan::txbc_, 1u << 24),
+      R::ReadOnly(0xC8, &Fdcan::txbrp_),
+      R::Fixed(0xCC),  // TXBAR
+      R::Fixed(0xD0),  // TXBCR
+      R::ReadOnly(0xD4, &Fdcan::txbto_),
+      R::ReadOnly(0xD8, &Fdcan::txbcf_),
+      R::ReadWrite(0xDC, &Fdcan::txbtie_, 7u),
+      R::ReadWrite(0xE0, &Fdcan::txbcie_, 7u),
+      R::Fixed(0xE8),  // TXEFA
+  };
+  return kTable;
+}
+
+namespace {
+// The registers software may write only with CCCR.INIT = CCE = 1 (RM0440 FDCAN
+// "protected write"), by name for the report; null for the others.
+const char* ProtectedName(std::uint32_t offset) {
+  switch (offset) {
+    case 0x0C:
+      return "DBTP";
+    case 0x10:
+      return "TEST";
+    case 0x14:
+      return "RWD";
+    case 0x1C:
+      return "NBTP";
+    case 0x20:
+      return "TSCC";
+    case 0x28:
+      return "TOCC";
+    case 0x48:
+      return "TDCR";
+    case 0x80:
+      return "RXGFC";
+    case 0x84:
+      return "XIDAM";
+    case 0xC0:
+      return "TXBC";
+    default:
+      return nullptr;
+  }
+}
+}  // namespace
+
 bool Fdcan::Read(const Access& a, std::uint32_t* v) {
   auto fifo_status = [&](int i) {
     const Fifo& q = rx_[static_cast<std::size_t>(i)];
@@ -336,38 +406,8 @@ bool Fdcan::Read(const Access& a, std::uint32_t* v) {
            (lost ? 1u << 25 : 0);
   };
   switch (a.offset) {
-    case 0x00:
-      *v = 0x32141218u;
-      return true;
-    case 0x04:
-      *v = 0x87654321u;
-      return true;
-    case 0x0C:
-      *v = dbtp_;
-      return true;
-    case 0x10:
-      *v = test_;
-      return true;
-    case 0x14:
-      *v = rwd_;
-      return true;
-    case 0x18:
-      *v = cccr_;
-      return true;
-    case 0x1C:
-      *v = nbtp_;
-      return true;
-    case 0x20:
-      *v = tscc_;
-      return true;
     case 0x24:
       *v = Timestamp();
-      return true;
-    case 0x28:
-      *v = tocc_;
-      return true;
-    case 0x2C:
-      *v = 0xFFFF;
       return true;
     case 0x40:
       *v = ecr_;
@@ -386,96 +426,27 @@ bool Fdcan::Read(const Access& a, std::uint32_t* v) {
       psr_ = (psr_ | 7u | (7u << 8)) & ~((1u << 11) | (1u << 12) | (1u << 13));
       return true;
     }
-    case 0x48:
-      *v = tdcr_;
-      return true;
-    case 0x50:
-      *v = ir_;
-      return true;
-    case 0x54:
-      *v = ie_;
-      return true;
-    case 0x58:
-      *v = ils_;
-      return true;
-    case 0x5C:
-      *v = ile_;
-      return true;
-    case 0x80:
-      *v = rxgfc_;
-      return true;
-    case 0x84:
-      *v = xidam_;
-      return true;
-    case 0x88:
-      *v = hpms_;
-      return true;
     case 0x90:
       *v = fifo_status(0);
-      return true;
-    case 0x94:
-      *v = 0;
       return true;
     case 0x98:
       *v = fifo_status(1);
       return true;
-    case 0x9C:
-      *v = 0;
-      return true;
-    case 0xC0:
-      *v = txbc_;
-      return true;
     case 0xC4:
       *v = tx_free_ | (tx_get_ << 8) | (tx_put_ << 16) | (tx_free_ == 0 ? 1u << 21 : 0);
-      return true;
-    case 0xC8:
-      *v = txbrp_;
-      return true;
-    case 0xCC:
-      *v = 0;
-      return true;
-    case 0xD0:
-      *v = 0;
-      return true;
-    case 0xD4:
-      *v = txbto_;
-      return true;
-    case 0xD8:
-      *v = txbcf_;
-      return true;
-    case 0xDC:
-      *v = txbtie_;
-      return true;
-    case 0xE0:
-      *v = txbcie_;
       return true;
     case 0xE4:
       *v = tx_event_.fill | (tx_event_.get << 8) | (tx_event_.put << 16) |
            (tx_event_.fill == 3 ? 1u << 24 : 0) | ((ir_ & kTefl) ? 1u << 25 : 0);
       return true;
-    case 0xE8:
-      *v = 0;
-      return true;
     default:
-      return false;
+      return ReadTableRegister(Registers(), *this, a.offset, v);
   }
 }
 
 bool Fdcan::Write(const Access& a) {
   const std::uint32_t v = a.value & a.mask;
   switch (a.offset) {
-    case 0x00:
-    case 0x04:
-      return true;  // read-only
-    case 0x0C:
-      if (Protected("DBTP")) a.Apply(&dbtp_, 0x009F1FFFu);
-      return true;
-    case 0x10:
-      if (Protected("TEST") && (cccr_ & (1u << 7))) a.Apply(&test_, 0x70u);
-      return true;
-    case 0x14:
-      if (Protected("RWD")) a.Apply(&rwd_, 0xFFu);
-      return true;
     case 0x18: {
       const std::uint32_t next = a.Merged(cccr_);
       const bool was_init = cccr_ & kInit, was_cce = cccr_ & kCce;
@@ -532,50 +503,16 @@ bool Fdcan::Write(const Access& a) {
       cccr_ = c;
       return true;
     }
-    case 0x1C:
-      if (Protected("NBTP")) a.Apply(&nbtp_, 0xFFFFFF7Fu);
-      return true;
-    case 0x20:
-      if (Protected("TSCC")) a.Apply(&tscc_, 0x000F0003u);
-      return true;
     case 0x24:
       ts_origin_ = now_;
       return true;  // a write resets the counter
-    case 0x28:
-      if (Protected("TOCC")) a.Apply(&tocc_, 0xFFFF0007u);
-      return true;
-    case 0x2C:
-      return true;
     case 0x40:
-      return true;
     case 0x44:
-      return true;
-    case 0x48:
-      if (Protected("TDCR")) a.Apply(&tdcr_, 0x7F7Fu);
-      return true;
-    case 0x50:
-      ir_ &= ~(v & 0x00FFFFFFu);
-      return true;
-    case 0x54:
-      a.Apply(&ie_, 0x00FFFFFFu);
-      return true;
-    case 0x58:
-      a.Apply(&ils_, 0x7Fu);
-      return true;
-    case 0x5C:
-      a.Apply(&ile_, 3u);
-      return true;
-    case 0x80:
-      if (Protected("RXGFC")) a.Apply(&rxgfc_, 0x0F1F033Fu);
-      return true;
-    case 0x84:
-      if (Protected("XIDAM")) a.Apply(&xidam_, 0x1FFFFFFFu);
-      return true;
-    case 0x88:
-      return true;
     case 0x90:
     case 0x98:
-      return true;
+    case 0xC4:
+    case 0xE4:
+      return true;  // read-only
     case 0x94:
     case 0x9C: {
       Fifo& q = rx_[a.offset == 0x94 ? 0 : 1];
@@ -592,12 +529,6 @@ bool Fdcan::Write(const Access& a) {
       q.get = (ai + 1) % 3;
       return true;
     }
-    case 0xC0:
-      if (Protected("TXBC")) a.Apply(&txbc_, 1u << 24);
-      return true;
-    case 0xC4:
-    case 0xC8:
-      return true;
     case 0xCC: {
       for (unsigned i = 0; i < 3; ++i) {
         if (!((v >> i) & 1u) || (txbrp_ >> i) & 1u) continue;
@@ -634,17 +565,6 @@ bool Fdcan::Write(const Access& a) {
       }
       return true;
     }
-    case 0xD4:
-    case 0xD8:
-      return true;
-    case 0xDC:
-      a.Apply(&txbtie_, 7u);
-      return true;
-    case 0xE0:
-      a.Apply(&txbcie_, 7u);
-      return true;
-    case 0xE4:
-      return true;
     case 0xE8: {
       const unsigned ai = v & 3u;
       const unsigned n = (ai + 3 - tx_event_.get) % 3 + 1;
@@ -657,8 +577,13 @@ bool Fdcan::Write(const Access& a) {
       return true;
     }
     default:
-      return false;
+      break;
   }
+  if (const char* name = ProtectedName(a.offset); name != nullptr && !Protected(name)) {
+    return true;
+  }
+  if (a.offset == 0x10 && !(cccr_ & (1u << 7))) return true;  // TEST needs CCCR.TEST
+  return WriteTableRegister(Registers(), *this, a);
 }
 
 bool Fdcan::ReadConfig(const Access& a, std::uint32_t* v) {

@@ -18,10 +18,19 @@ constexpr std::uint32_t kSrW1c = 0x0000C3FBu;  // every flag but BSY
 constexpr std::uint32_t kBlocking = Flash::kProgerr | Flash::kWrperr | Flash::kPgaerr |
                                     Flash::kSizerr | Flash::kPgserr | Flash::kMisserr |
                                     Flash::kFasterr;
-std::string Hex(std::uint32_t v) {
-  char b[16];
-  std::snprintf(b, sizeof b, "0x%08X", v);
-  return b;
+
+// One write to a key register (KEYR, OPTKEYR: RM0440 §5.3.5): the first key, then the
+// second, unlock; anything else ends the sequence (`*stage`: 1 after the first key).
+enum class KeyStep : std::uint8_t { kFirstKey, kUnlocked, kWrong };
+KeyStep NextKey(int* stage, std::uint32_t value, std::uint32_t first,
+                std::uint32_t second) {
+  if (*stage == 0 && value == first) {
+    *stage = 1;
+    return KeyStep::kFirstKey;
+  }
+  const bool unlocked = *stage == 1 && value == second;
+  *stage = 0;
+  return unlocked ? KeyStep::kUnlocked : KeyStep::kWrong;
 }
 }  // namespace
 
@@ -159,61 +168,54 @@ Picoseconds Flash::NextEvent() const {
   return op_.cut_at < op_.end ? op_.cut_at : op_.end;
 }
 
-bool Flash::Read(const Access& a, std::uint32_t* v) {
-  switch (a.offset) {
-    case 0x00:
-      *v = acr_;
-      return true;
-    case 0x04:
-    case 0x08:
-    case 0x0C:
-      *v = 0;
-      return true;  // key registers are write-only
-    case 0x10:
-      *v = sr_ | (busy() ? kBsy : 0);
-      return true;
-    case 0x14:
-      *v = cr_;
-      return true;
-    case 0x18:
-      *v = 0;
-      return true;  // ECCR: no ECC errors modelled
-    case 0x20:
-      *v = optr_;
-      return true;
-    case 0x24:
-      *v = 0xFFFF0000u;
-      return true;
-    case 0x28:
-      *v = 0;
-      return true;
+RegisterTable<Flash> Flash::Registers() {
+  using R = Register<Flash>;
+  // ACR, the key registers, CR and the option registers write through code of their own
+  // (see Write); SR and the WRP areas read through it.
+  static constexpr R kTable[] = {
+      R::ReadWrite(0x00, &Flash::acr_, 0x00047F0Fu),
+      R::Fixed(0x04),  // PDKEYR: write-only, power-down not modelled
+      R::Fixed(0x08),  // KEYR: write-only
+      R::Fixed(0x0C),  // OPTKEYR: write-only
+      R::ClearByWriting1(0x10, &Flash::sr_, kSrW1c),
+      R::ReadWrite(0x14, &Flash::cr_),
+      R::Fixed(0x18),  // ECCR: no ECC errors modelled
+      R::ReadOnly(0x20, &Flash::optr_),
+      R::Fixed(0x24, 0xFFFF0000u),
+      R::Fixed(0x28),
+      R::Fixed(0x44, 0xFFFF0000u),
+      R::Fixed(0x48),
+      R::Fixed(0x70, 0xFFF0FF00u),
+      R::Fixed(0x74, 0xFFFFFF00u),
+  };
+  return kTable;
+}
+
+const std::uint32_t* Flash::Wrp(std::uint32_t offset) const {
+  switch (offset) {
     case 0x2C:
-      *v = wrp_[0];
-      return true;
+      return &wrp_[0];
     case 0x30:
-      *v = wrp_[1];
-      return true;
-    case 0x44:
-      *v = 0xFFFF0000u;
-      return true;
-    case 0x48:
-      *v = 0;
-      return true;
+      return &wrp_[1];
     case 0x4C:
-      *v = wrp_[2];
-      return true;
+      return &wrp_[2];
     case 0x50:
-      *v = wrp_[3];
-      return true;
-    case 0x70:
-      *v = 0xFFF0FF00u;
-      return true;
-    case 0x74:
-      *v = 0xFFFFFF00u;
-      return true;
+      return &wrp_[3];
     default:
-      return false;
+      return nullptr;
   }
+}
+
+bool Flash::Read(const Access& a, std::uint32_t* v) {
+  if (a.offset == 0x10) {
+    *v = sr_ | (busy() ? kBsy : 0);
+    return true;
+  }
+  if (const std::uint32_t* wrp = Wrp(a.offset)) {
+    *v = *wrp;
+    return true;
+  }
+  return ReadTableRegister(Registers(), *this, a.offset, v);
 }
 
 bool Flash::Write(const Access& a) {
@@ -231,8 +233,6 @@ bool Flash::Write(const Access& a) {
       acr_ = next;
       return true;
     }
-    case 0x04:
-      return true;  // PDKEYR: power-down not modelled
     case 0x08: {
       if (keys_dead_ || !locked()) {
         log_->Report(now_, "FLASH",
@@ -240,14 +240,11 @@ bool Flash::Write(const Access& a) {
                                 : "KEYR written while CR is already unlocked");
         return true;
       }
-      if (key_stage_ == 0 && v == kKey1) {
-        key_stage_ = 1;
-      } else if (key_stage_ == 1 && v == kKey2) {
-        key_stage_ = 0;
+      const KeyStep step = NextKey(&key_stage_, v, kKey1, kKey2);
+      if (step == KeyStep::kUnlocked) {
         cr_ &= ~kLock;
-      } else {
+      } else if (step == KeyStep::kWrong) {
         keys_dead_ = true;
-        key_stage_ = 0;
         log_->Report(now_, "bus",
                      "bus error (HardFault): wrong FLASH_KEYR sequence (" + Hex(v) +
                          "); FLASH_CR locked until the next reset (RM0440 §5.3.5)");
@@ -259,12 +256,10 @@ bool Flash::Write(const Access& a) {
         log_->Report(now_, "FLASH", "OPTKEYR written while CR.LOCK = 1: ignored");
         return true;
       }
-      if (optkey_stage_ == 0 && v == kOptKey1) {
-        optkey_stage_ = 1;
-      } else if (optkey_stage_ == 1 && v == kOptKey2) {
-        optkey_stage_ = 0;
+      const KeyStep step = NextKey(&optkey_stage_, v, kOptKey1, kOptKey2);
+      if (step == KeyStep::kUnlocked) {
         cr_ &= ~kOptlock;
-      } else {
+      } else if (step == KeyStep::kWrong) {
         keys_dead_ = true;
         cr_ |= kLock | kOptlock;
         log_->Report(now_, "bus",
@@ -273,9 +268,6 @@ bool Flash::Write(const Access& a) {
       }
       return true;
     }
-    case 0x10:
-      sr_ &= ~(v & kSrW1c);
-      return true;
     case 0x14: {
       if (locked()) {
         // LOCK can only be set; everything else is frozen while locked.
@@ -351,8 +343,6 @@ bool Flash::Write(const Access& a) {
       log_->Report(now_, "FLASH", "CR.STRT with neither PER nor MER1/MER2: nothing done");
       return true;
     }
-    case 0x18:
-      return true;
     case 0x20:
       log_->Report(now_, "FLASH", "FLASH_OPTR written: option bytes are not modelled");
       return true;
@@ -369,7 +359,7 @@ bool Flash::Write(const Access& a) {
       log_->Report(now_, "FLASH", "option-byte register written: not modelled");
       return true;
     default:
-      return false;
+      return WriteTableRegister(Registers(), *this, a);
   }
 }
 

@@ -138,49 +138,34 @@ void GpioPort::DriveInput(int pin, std::optional<bool> level) {
   Refresh(1u << pin);  // an external driver moves its own pin only
 }
 
+RegisterTable<GpioPort> GpioPort::Registers() {
+  using R = Register<GpioPort>;
+  // IDR reads the pins and BSRR/BRR write through code of their own (see Read and Write).
+  static constexpr R kTable[] = {
+      R::ReadWrite(0x00, &GpioPort::moder_),
+      R::ReadWrite(0x04, &GpioPort::otyper_, 0xFFFFu),
+      R::ReadWrite(0x08, &GpioPort::ospeedr_),
+      R::ReadWrite(0x0C, &GpioPort::pupdr_),
+      R::ReadWrite(0x14, &GpioPort::odr_, 0xFFFFu),
+      R::Fixed(0x18),  // BSRR is write-only
+      R::ReadWrite(0x1C, &GpioPort::lckr_, 0x1FFFFu),
+      R::ReadWrite(0x20, &GpioPort::afrl_),
+      R::ReadWrite(0x24, &GpioPort::afrh_),
+      R::Fixed(0x28),  // BRR is write-only
+  };
+  return kTable;
+}
+
 bool GpioPort::Read(const Access& a, std::uint32_t* v) {
-  switch (a.offset) {
-    case 0x00:
-      *v = moder_;
-      return true;
-    case 0x04:
-      *v = otyper_;
-      return true;
-    case 0x08:
-      *v = ospeedr_;
-      return true;
-    case 0x0C:
-      *v = pupdr_;
-      return true;
-    case 0x10: {
-      std::uint32_t idr = 0;
-      for (int pin = 0; pin < 16; ++pin) {
-        if (mode(pin) != PinMode::kAnalog && Level(pin).value_or(false)) idr |= 1u << pin;
-      }
-      *v = idr;
-      return true;
+  if (a.offset == 0x10) {
+    std::uint32_t idr = 0;
+    for (int pin = 0; pin < 16; ++pin) {
+      if (mode(pin) != PinMode::kAnalog && Level(pin).value_or(false)) idr |= 1u << pin;
     }
-    case 0x14:
-      *v = odr_;
-      return true;
-    case 0x18:
-      *v = 0;
-      return true;  // BSRR is write-only
-    case 0x1C:
-      *v = lckr_;
-      return true;
-    case 0x20:
-      *v = afrl_;
-      return true;
-    case 0x24:
-      *v = afrh_;
-      return true;
-    case 0x28:
-      *v = 0;
-      return true;
-    default:
-      return false;
+    *v = idr;
+    return true;
   }
+  return ReadTableRegister(Registers(), *this, a.offset, v);
 }
 
 bool GpioPort::Write(const Access& a) {
@@ -189,46 +174,22 @@ bool GpioPort::Write(const Access& a) {
   const std::uint32_t odr_before = odr_;
   const bool output_only = a.offset == 0x14 || a.offset == 0x18 || a.offset == 0x28;
   switch (a.offset) {
-    case 0x00:
-      a.Apply(&moder_);
-      NoteRouting();
-      break;
-    case 0x04:
-      a.Apply(&otyper_, 0xFFFFu);
-      break;
-    case 0x08:
-      a.Apply(&ospeedr_);
-      break;
-    case 0x0C:
-      a.Apply(&pupdr_);
-      break;
     case 0x10:
       return true;  // IDR is read-only
-    case 0x14:
-      a.Apply(&odr_, 0xFFFFu);
-      break;
     case 0x18: {
       // "If both BSx and BRx are set, BSx has priority."
       const std::uint32_t v = a.value & a.mask;
       odr_ = (odr_ & ~(v >> 16)) | (v & 0xFFFFu);
       break;
     }
-    case 0x1C:
-      a.Apply(&lckr_, 0x1FFFFu);
-      break;
-    case 0x20:
-      a.Apply(&afrl_);
-      NoteRouting();
-      break;
-    case 0x24:
-      a.Apply(&afrh_);
-      NoteRouting();
-      break;
     case 0x28:
       odr_ &= ~(a.value & a.mask & 0xFFFFu);
       break;
     default:
-      return false;
+      if (!WriteTableRegister(Registers(), *this, a)) return false;
+      // MODER and AFRL/AFRH route the pins' signals.
+      if (a.offset == 0x00 || a.offset == 0x20 || a.offset == 0x24) NoteRouting();
+      break;
   }
   (void)log_;
   Refresh(output_only ? (odr_before ^ odr_) & 0xFFFFu : 0xFFFFu);

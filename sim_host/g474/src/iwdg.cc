@@ -62,27 +62,26 @@ Picoseconds Iwdg::NextEvent() const {
   return next;
 }
 
+RegisterTable<Iwdg> Iwdg::Registers() {
+  using R = Register<Iwdg>;
+  // KR takes the key sequence and PR, RLR, WINR are locked behind it (see Write); SR
+  // reads the update flags through Read.
+  static constexpr R kTable[] = {
+      R::Fixed(0x00),  // KR: "write only, read 0x0000"
+      R::ReadWrite(0x04, &Iwdg::pr_, 7u),
+      R::ReadWrite(0x08, &Iwdg::rlr_, 0xFFFu),
+      R::ReadWrite(0x10, &Iwdg::winr_, 0xFFFu),
+  };
+  return kTable;
+}
+
 bool Iwdg::Read(const Access& a, std::uint32_t* v) {
-  switch (a.offset) {
-    case 0x00:
-      *v = 0;
-      return true;  // "write only, read 0x0000"
-    case 0x04:
-      *v = pr_;
-      return true;
-    case 0x08:
-      *v = rlr_;
-      return true;
-    case 0x0C:
-      *v = (now_ < pvu_until_ ? 1u : 0u) | (now_ < rvu_until_ ? 2u : 0u) |
-           (now_ < wvu_until_ ? 4u : 0u);
-      return true;
-    case 0x10:
-      *v = winr_;
-      return true;
-    default:
-      return false;
+  if (a.offset == 0x0C) {
+    *v = (now_ < pvu_until_ ? 1u : 0u) | (now_ < rvu_until_ ? 2u : 0u) |
+         (now_ < wvu_until_ ? 4u : 0u);
+    return true;
   }
+  return ReadTableRegister(Registers(), *this, a.offset, v);
 }
 
 bool Iwdg::Write(const Access& a) {
@@ -128,12 +127,8 @@ bool Iwdg::Write(const Access& a) {
                      "register written while its previous update is still in progress "
                      "(SR.PVU/RVU/WVU set): RM0440 asks to wait for the flag");
       }
-      if (a.offset == 0x04) a.Apply(&pr_, 7u);
-      if (a.offset == 0x08) a.Apply(&rlr_, 0xFFFu);
-      if (a.offset == 0x10) {
-        a.Apply(&winr_, 0xFFFu);
-        if (running_) counter_ = rlr_;  // writing the window also reloads
-      }
+      WriteTableRegister(Registers(), *this, a);
+      if (a.offset == 0x10 && running_) counter_ = rlr_;  // writing the window reloads
       *busy = now_ + update;
       return true;
     }

@@ -273,6 +273,44 @@ bool Rcc::ClockEnabled(Gate g) const {
   }
 }
 
+RegisterTable<Rcc> Rcc::Registers() {
+  using R = Register<Rcc>;
+  // CR and CSR read and write through code of their own; CFGR, PLLCFGR and CICR (which
+  // clears CIFR) write through it; the reset registers and CCIPR have side effects
+  // after the write (see WriteRegister).
+  static constexpr R kTable[] = {
+      R::ReadWrite(0x04, &Rcc::icscr_, 0x7F000000u),
+      R::ReadWrite(0x08, &Rcc::cfgr_),
+      R::ReadWrite(0x0C, &Rcc::pllcfgr_),
+      R::ReadWrite(0x18, &Rcc::cier_, 0x0000043Fu),
+      R::ReadOnly(0x1C, &Rcc::cifr_),
+      R::Fixed(0x20),
+      R::ReadWrite(0x28, &Rcc::ahb1rstr_),
+      R::ReadWrite(0x2C, &Rcc::ahb2rstr_),
+      R::ReadWrite(0x30, &Rcc::ahb3rstr_),
+      R::ReadWrite(0x38, &Rcc::apb1rstr1_),
+      R::ReadWrite(0x3C, &Rcc::apb1rstr2_),
+      R::ReadWrite(0x40, &Rcc::apb2rstr_),
+      R::ReadWrite(0x48, &Rcc::ahb1enr_),
+      R::ReadWrite(0x4C, &Rcc::ahb2enr_),
+      R::ReadWrite(0x50, &Rcc::ahb3enr_),
+      R::ReadWrite(0x58, &Rcc::apb1enr1_),
+      R::ReadWrite(0x5C, &Rcc::apb1enr2_),
+      R::ReadWrite(0x60, &Rcc::apb2enr_),
+      R::ReadWrite(0x68, &Rcc::ahb1smenr_),
+      R::ReadWrite(0x6C, &Rcc::ahb2smenr_),
+      R::ReadWrite(0x70, &Rcc::ahb3smenr_),
+      R::ReadWrite(0x78, &Rcc::apb1smenr1_),
+      R::ReadWrite(0x7C, &Rcc::apb1smenr2_),
+      R::ReadWrite(0x80, &Rcc::apb2smenr_),
+      R::ReadWrite(0x88, &Rcc::ccipr_),
+      R::ReadWrite(0x90, &Rcc::bdcr_),
+      R::ReadWrite(0x98, &Rcc::crrcr_, 1u),
+      R::ReadWrite(0x9C, &Rcc::ccipr2_),
+  };
+  return kTable;
+}
+
 bool Rcc::Read(const Access& a, std::uint32_t* v) {
   switch (a.offset) {
     case 0x00:
@@ -280,95 +318,11 @@ bool Rcc::Read(const Access& a, std::uint32_t* v) {
            (osc_[kHse].on ? kHseon : 0) | (osc_[kHse].ready ? kHserdy : 0) |
            (osc_[kPll].on ? kPllon : 0) | (osc_[kPll].ready ? kPllrdy : 0);
       return true;
-    case 0x04:
-      *v = icscr_;
-      return true;
-    case 0x08:
-      *v = cfgr_;
-      return true;
-    case 0x0C:
-      *v = pllcfgr_;
-      return true;
-    case 0x18:
-      *v = cier_;
-      return true;
-    case 0x1C:
-      *v = cifr_;
-      return true;
-    case 0x20:
-      *v = 0;
-      return true;
-    case 0x28:
-      *v = ahb1rstr_;
-      return true;
-    case 0x2C:
-      *v = ahb2rstr_;
-      return true;
-    case 0x30:
-      *v = ahb3rstr_;
-      return true;
-    case 0x38:
-      *v = apb1rstr1_;
-      return true;
-    case 0x3C:
-      *v = apb1rstr2_;
-      return true;
-    case 0x40:
-      *v = apb2rstr_;
-      return true;
-    case 0x48:
-      *v = ahb1enr_;
-      return true;
-    case 0x4C:
-      *v = ahb2enr_;
-      return true;
-    case 0x50:
-      *v = ahb3enr_;
-      return true;
-    case 0x58:
-      *v = apb1enr1_;
-      return true;
-    case 0x5C:
-      *v = apb1enr2_;
-      return true;
-    case 0x60:
-      *v = apb2enr_;
-      return true;
-    case 0x68:
-      *v = ahb1smenr_;
-      return true;
-    case 0x6C:
-      *v = ahb2smenr_;
-      return true;
-    case 0x70:
-      *v = ahb3smenr_;
-      return true;
-    case 0x78:
-      *v = apb1smenr1_;
-      return true;
-    case 0x7C:
-      *v = apb1smenr2_;
-      return true;
-    case 0x80:
-      *v = apb2smenr_;
-      return true;
-    case 0x88:
-      *v = ccipr_;
-      return true;
-    case 0x90:
-      *v = bdcr_;
-      return true;
     case 0x94:
       *v = csr_ & ~csr::kRmvf;
       return true;
-    case 0x98:
-      *v = crrcr_;
-      return true;
-    case 0x9C:
-      *v = ccipr2_;
-      return true;
     default:
-      return false;
+      return ReadTableRegister(Registers(), *this, a.offset, v);
   }
 }
 
@@ -422,9 +376,6 @@ bool Rcc::WriteRegister(const Access& a) {
       Changed();
       return true;
     }
-    case 0x04:
-      a.Apply(&icscr_, 0x7F000000u);
-      return true;
     case 0x08: {
       std::uint32_t v = a.Merged(cfgr_);
       if ((v & 3u) == 0) {
@@ -457,89 +408,8 @@ bool Rcc::WriteRegister(const Access& a) {
       Changed();
       return true;
     }
-    case 0x18:
-      a.Apply(&cier_, 0x0000043Fu);
-      return true;
-    case 0x1C:
-      return true;  // read-only
     case 0x20:
       cifr_ &= ~(a.value & a.mask & 0x0000073Fu);
-      return true;
-    case 0x28:
-      a.Apply(&ahb1rstr_);
-      return true;
-    case 0x2C: {
-      a.Apply(&ahb2rstr_);
-      for (unsigned i = 0; i < 7; ++i) {
-        if ((ahb2rstr_ >> i) & 1u && reset_hook_) {
-          reset_hook_(static_cast<Gate>(static_cast<unsigned>(Gate::kGpioA) + i));
-        }
-      }
-      return true;
-    }
-    case 0x30:
-      a.Apply(&ahb3rstr_);
-      return true;
-    case 0x38:
-      a.Apply(&apb1rstr1_);
-      if (reset_hook_) {
-        if (apb1rstr1_ & (1u << 1)) reset_hook_(Gate::kTim3);
-        if (apb1rstr1_ & (1u << 25)) reset_hook_(Gate::kFdcan);
-        if (apb1rstr1_ & (1u << 28)) reset_hook_(Gate::kPwr);
-      }
-      return true;
-    case 0x3C:
-      a.Apply(&apb1rstr2_);
-      return true;
-    case 0x40:
-      a.Apply(&apb2rstr_);
-      if (reset_hook_) {
-        if (apb2rstr_ & (1u << 11)) reset_hook_(Gate::kTim1);
-        if (apb2rstr_ & (1u << 12)) reset_hook_(Gate::kSpi1);
-      }
-      return true;
-    case 0x48:
-      a.Apply(&ahb1enr_);
-      return true;
-    case 0x4C:
-      a.Apply(&ahb2enr_);
-      return true;
-    case 0x50:
-      a.Apply(&ahb3enr_);
-      return true;
-    case 0x58:
-      a.Apply(&apb1enr1_);
-      return true;
-    case 0x5C:
-      a.Apply(&apb1enr2_);
-      return true;
-    case 0x60:
-      a.Apply(&apb2enr_);
-      return true;
-    case 0x68:
-      a.Apply(&ahb1smenr_);
-      return true;
-    case 0x6C:
-      a.Apply(&ahb2smenr_);
-      return true;
-    case 0x70:
-      a.Apply(&ahb3smenr_);
-      return true;
-    case 0x78:
-      a.Apply(&apb1smenr1_);
-      return true;
-    case 0x7C:
-      a.Apply(&apb1smenr2_);
-      return true;
-    case 0x80:
-      a.Apply(&apb2smenr_);
-      return true;
-    case 0x88:
-      a.Apply(&ccipr_);
-      Changed();
-      return true;
-    case 0x90:
-      a.Apply(&bdcr_);
       return true;
     case 0x94: {
       const std::uint32_t v = a.value & a.mask;
@@ -552,15 +422,38 @@ bool Rcc::WriteRegister(const Access& a) {
       }
       return true;
     }
-    case 0x98:
-      a.Apply(&crrcr_, 1u);
-      return true;
-    case 0x9C:
-      a.Apply(&ccipr2_);
-      return true;
     default:
-      return false;
+      break;
   }
+  if (!WriteTableRegister(Registers(), *this, a)) return false;
+  switch (a.offset) {
+    case 0x2C:
+      for (unsigned i = 0; i < 7; ++i) {
+        if ((ahb2rstr_ >> i) & 1u && reset_hook_) {
+          reset_hook_(static_cast<Gate>(static_cast<unsigned>(Gate::kGpioA) + i));
+        }
+      }
+      break;
+    case 0x38:
+      if (reset_hook_) {
+        if (apb1rstr1_ & (1u << 1)) reset_hook_(Gate::kTim3);
+        if (apb1rstr1_ & (1u << 25)) reset_hook_(Gate::kFdcan);
+        if (apb1rstr1_ & (1u << 28)) reset_hook_(Gate::kPwr);
+      }
+      break;
+    case 0x40:
+      if (reset_hook_) {
+        if (apb2rstr_ & (1u << 11)) reset_hook_(Gate::kTim1);
+        if (apb2rstr_ & (1u << 12)) reset_hook_(Gate::kSpi1);
+      }
+      break;
+    case 0x88:
+      Changed();
+      break;
+    default:
+      break;
+  }
+  return true;
 }
 
 // ── PWR ────────────────────────────────────────────────────────────────────────────
@@ -579,85 +472,61 @@ void Pwr::Reset() {
 
 void Pwr::Advance(Picoseconds now) { now_ = now; }
 
+RegisterTable<Pwr> Pwr::Registers() {
+  using R = Register<Pwr>;
+  // CR1 and CR5 have side effects after the write; SR2 reads through Read (VOSF).
+  static constexpr R kTable[] = {
+      R::ReadWrite(0x00, &Pwr::cr1_, 0x0000071Fu),
+      R::ReadWrite(0x04, &Pwr::cr2_),
+      R::ReadWrite(0x08, &Pwr::cr3_),
+      R::ReadWrite(0x0C, &Pwr::cr4_),
+      R::ReadOnly(0x10, &Pwr::sr1_),
+      R::Fixed(0x14),
+      R::Fixed(0x18),  // SCR reads 0
+      R::ReadWrite(0x80, &Pwr::cr5_, 1u << 8),
+  };
+  return kTable;
+}
+
+std::uint32_t* Pwr::PullRegister(std::uint32_t offset) {
+  // PUCRx/PDCRx of ports A..G, seven pairs from 0x20.
+  if (offset >= 0x20 && offset <= 0x54) return &pucr_pdcr_[(offset - 0x20) / 4];
+  return nullptr;
+}
+
 bool Pwr::Read(const Access& a, std::uint32_t* v) {
-  switch (a.offset) {
-    case 0x00:
-      *v = cr1_;
-      return true;
-    case 0x04:
-      *v = cr2_;
-      return true;
-    case 0x08:
-      *v = cr3_;
-      return true;
-    case 0x0C:
-      *v = cr4_;
-      return true;
-    case 0x10:
-      *v = sr1_;
-      return true;
-    // SR2.VOSF: "the regulator reached the voltage level defined with VOS" is shown
-    // as 0; while it settles after a VOS change it reads 1 (REGLPF/REGLPS 0: the main
-    // regulator runs).
-    case 0x14:
-      *v = (now_ < vosf_until_) ? (1u << 10) : 0;
-      return true;
-    case 0x18:
-      *v = 0;
-      return true;
-    case 0x80:
-      *v = cr5_;
-      return true;
-    default:
-      if (a.offset >= 0x20 && a.offset <= 0x54) {
-        *v = pucr_pdcr_[(a.offset - 0x20) / 4];
-        return true;
-      }
-      return false;
+  // SR2.VOSF: "the regulator reached the voltage level defined with VOS" is shown
+  // as 0; while it settles after a VOS change it reads 1 (REGLPF/REGLPS 0: the main
+  // regulator runs).
+  if (a.offset == 0x14) {
+    *v = (now_ < vosf_until_) ? (1u << 10) : 0;
+    return true;
   }
+  if (const std::uint32_t* pull = PullRegister(a.offset)) {
+    *v = *pull;
+    return true;
+  }
+  return ReadTableRegister(Registers(), *this, a.offset, v);
 }
 
 bool Pwr::Write(const Access& a) {
-  switch (a.offset) {
-    case 0x00: {
-      const std::uint32_t old = cr1_;
-      a.Apply(&cr1_, 0x0000071Fu);
-      const std::uint32_t vos = (cr1_ >> 9) & 3u;
-      if (vos == 0 || vos == 3) {
-        log_->Report(now_, "PWR", "CR1.VOS = " + std::to_string(vos) + " is reserved");
-      }
-      // The regulator needs time to settle after a range change (the datasheet's
-      // tVOST, tens of µs): VOSF reads 1 meanwhile.
-      if (((old ^ cr1_) >> 9 & 3u) != 0) vosf_until_ = now_ + Microseconds(20);
-      if (change_hook_) change_hook_();
-      return true;
-    }
-    case 0x04:
-      a.Apply(&cr2_);
-      return true;
-    case 0x08:
-      a.Apply(&cr3_);
-      return true;
-    case 0x0C:
-      a.Apply(&cr4_);
-      return true;
-    case 0x10:
-      return true;
-    case 0x14:
-      return true;
-    case 0x18:
-      return true;
-    case 0x80:
-      a.Apply(&cr5_, 1u << 8);
-      if (change_hook_) change_hook_();
-      return true;
-    default:
-      if (a.offset >= 0x20 && a.offset <= 0x54) {
-        a.Apply(&pucr_pdcr_[(a.offset - 0x20) / 4]);
-        return true;
-      }
-      return false;
+  if (std::uint32_t* pull = PullRegister(a.offset)) {
+    a.Apply(pull);
+    return true;
   }
+  const std::uint32_t old = cr1_;
+  if (!WriteTableRegister(Registers(), *this, a)) return false;
+  if (a.offset == 0x00) {
+    const std::uint32_t vos = (cr1_ >> 9) & 3u;
+    if (vos == 0 || vos == 3) {
+      log_->Report(now_, "PWR", "CR1.VOS = " + std::to_string(vos) + " is reserved");
+    }
+    // The regulator needs time to settle after a range change (the datasheet's
+    // tVOST, tens of µs): VOSF reads 1 meanwhile.
+    if (((old ^ cr1_) >> 9 & 3u) != 0) vosf_until_ = now_ + Microseconds(20);
+  }
+  if ((a.offset == 0x00 || a.offset == 0x80) && change_hook_) change_hook_();
+  return true;
 }
 
 // ── Clock rules ────────────────────────────────────────────────────────────────────

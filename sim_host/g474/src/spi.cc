@@ -98,14 +98,24 @@ void Spi::Advance(Picoseconds now) {
 
 Picoseconds Spi::NextEvent() const { return busy_ ? current_.end : kNever; }
 
+RegisterTable<Spi> Spi::Registers() {
+  using R = Register<Spi>;
+  // SR and DR read and write through code of their own; CR1 and CR2 have side effects
+  // after the write (see Read and Write).
+  static constexpr R kTable[] = {
+      R::ReadWrite(0x00, &Spi::cr1_, 0xFFFFu),
+      R::ReadWrite(0x04, &Spi::cr2_, 0x7FFFu),
+      R::ReadWrite(0x10, &Spi::crcpr_, 0xFFFFu),
+      R::Fixed(0x14),  // RXCRCR: CRC not modelled
+      R::Fixed(0x18),  // TXCRCR
+      R::ReadWrite(0x1C, &Spi::i2scfgr_),
+      R::ReadWrite(0x20, &Spi::i2spr_),
+  };
+  return kTable;
+}
+
 bool Spi::Read(const Access& a, std::uint32_t* v) {
   switch (a.offset) {
-    case 0x00:
-      *v = cr1_;
-      return true;
-    case 0x04:
-      *v = cr2_;
-      return true;
     case 0x08:
       *v = Sr();
       if (ovr_armed_) ovr_ = ovr_armed_ = false;  // DR read then SR read clears OVR
@@ -128,55 +138,13 @@ bool Spi::Read(const Access& a, std::uint32_t* v) {
       *v = r;
       return true;
     }
-    case 0x10:
-      *v = crcpr_;
-      return true;
-    case 0x14:
-    case 0x18:
-      *v = 0;
-      return true;
-    case 0x1C:
-      *v = i2scfgr_;
-      return true;
-    case 0x20:
-      *v = i2spr_;
-      return true;
     default:
-      return false;
+      return ReadTableRegister(Registers(), *this, a.offset, v);
   }
 }
 
 bool Spi::Write(const Access& a) {
   switch (a.offset) {
-    case 0x00: {
-      const std::uint32_t before = cr1_;
-      a.Apply(&cr1_, 0xFFFFu);
-      if ((before & kSpe) && !(cr1_ & kSpe) && (busy_ || !tx_.empty())) {
-        log_->Report(now_, "SPI1",
-                     "SPE cleared during a transfer (wait for FTLVL = 0 and BSY = 0 "
-                     "first, RM0440 'Disabling the SPI')");
-        busy_ = false;
-        tx_.clear();
-      }
-      if ((cr1_ & kMstr) && (cr1_ & kSpe) && (cr1_ & kSsm) && !(cr1_ & kSsi)) {
-        // Master with software NSS low: mode fault.
-        modf_ = true;
-        cr1_ &= ~(kSpe | kMstr);
-        log_->Report(now_, "SPI1", "MODF: master enabled with SSM = 1 and SSI = 0");
-      }
-      StartNext();
-      return true;
-    }
-    case 0x04: {
-      a.Apply(&cr2_, 0x7FFFu);
-      const unsigned ds = (cr2_ >> 8) & 0xFu;
-      if (ds < 3) {
-        cr2_ = (cr2_ & ~(0xFu << 8)) | (7u << 8);  // "not used" values: forced to 8 bits
-        log_->Report(now_, "SPI1",
-                     "CR2.DS = " + std::to_string(ds) + " not used: 8 bits");
-      }
-      return true;
-    }
     case 0x08:
       return true;  // the flags are cleared by their sequences
     case 0x0C: {
@@ -193,21 +161,34 @@ bool Spi::Write(const Access& a) {
       StartNext();
       return true;
     }
-    case 0x10:
-      a.Apply(&crcpr_, 0xFFFFu);
-      return true;
-    case 0x14:
-    case 0x18:
-      return true;
-    case 0x1C:
-      a.Apply(&i2scfgr_);
-      return true;
-    case 0x20:
-      a.Apply(&i2spr_);
-      return true;
     default:
-      return false;
+      break;
   }
+  const std::uint32_t before = cr1_;
+  if (!WriteTableRegister(Registers(), *this, a)) return false;
+  if (a.offset == 0x00) {
+    if ((before & kSpe) && !(cr1_ & kSpe) && (busy_ || !tx_.empty())) {
+      log_->Report(now_, "SPI1",
+                   "SPE cleared during a transfer (wait for FTLVL = 0 and BSY = 0 "
+                   "first, RM0440 'Disabling the SPI')");
+      busy_ = false;
+      tx_.clear();
+    }
+    if ((cr1_ & kMstr) && (cr1_ & kSpe) && (cr1_ & kSsm) && !(cr1_ & kSsi)) {
+      // Master with software NSS low: mode fault.
+      modf_ = true;
+      cr1_ &= ~(kSpe | kMstr);
+      log_->Report(now_, "SPI1", "MODF: master enabled with SSM = 1 and SSI = 0");
+    }
+    StartNext();
+  } else if (a.offset == 0x04) {
+    const unsigned ds = (cr2_ >> 8) & 0xFu;
+    if (ds < 3) {
+      cr2_ = (cr2_ & ~(0xFu << 8)) | (7u << 8);  // "not used" values: forced to 8 bits
+      log_->Report(now_, "SPI1", "CR2.DS = " + std::to_string(ds) + " not used: 8 bits");
+    }
+  }
+  return true;
 }
 
 }  // namespace mjc::g474model

@@ -360,146 +360,115 @@ Drive Timer::Level(int ch, bool complementary) const {
   return (ref != pol) ? Drive::kHigh : Drive::kLow;
 }
 
+RegisterTable<Timer> Timer::Registers() {
+  using R = Register<Timer>;
+  // CR1, SMCR, CCMRx and ARR have side effects after the write (see Write), EGR and the
+  // CCRx have code of their own; CCER's writable bits are TIM3's (TIM1's in Write).
+  static constexpr R kTable[] = {
+      R::ReadWrite(0x00, &Timer::cr1_, 0x1BFFu),
+      R::ReadWrite(0x04, &Timer::cr2_),
+      R::ReadWrite(0x08, &Timer::smcr_),
+      R::ReadWrite(0x0C, &Timer::dier_),
+      R::ClearByWriting0(0x10, &Timer::sr_),
+      R::Fixed(0x14),  // EGR reads 0
+      R::ReadWrite(0x18, &Timer::ccmr1_),
+      R::ReadWrite(0x1C, &Timer::ccmr2_),
+      R::ReadWrite(0x20, &Timer::ccer_, 0x0000BBBBu),
+      R::ReadWrite(0x24, &Timer::cnt_, 0xFFFFu),
+      R::ReadWrite(0x28, &Timer::psc_, 0xFFFFu),  // always preloaded
+      R::ReadWrite(0x2C, &Timer::arr_, 0xFFFFu),
+      R::ReadWrite(0x58, &Timer::ecr_),
+      R::ReadWrite(0x5C, &Timer::tisel_),
+      R::ReadWrite(0x60, &Timer::af1_),
+      R::ReadWrite(0x64, &Timer::af2_),
+      R::ReadWrite(0x3DC, &Timer::dcr_),
+      R::Fixed(0x3E0),
+  };
+  return kTable;
+}
+
+RegisterTable<Timer> Timer::AdvancedRegisters() {
+  using R = Register<Timer>;
+  // LOCK levels are not modelled; BDTR.MOE is what gates the outputs.
+  static constexpr R kTable[] = {
+      R::ReadWrite(0x30, &Timer::rcr_, 0xFFFFu), R::ReadWrite(0x44, &Timer::bdtr_),
+      R::ReadWrite(0x50, &Timer::ccmr3_), R::ReadWrite(0x54, &Timer::dtr2_)};
+  return kTable;
+}
+
+std::uint32_t* Timer::Ccr(std::uint32_t offset) {
+  if (offset >= 0x34 && offset <= 0x40) return &ccr_[(offset - 0x34) / 4];
+  if (kind_ != Kind::kAdvanced) return nullptr;
+  if (offset == 0x48) return &ccr_[4];
+  if (offset == 0x4C) return &ccr_[5];
+  return nullptr;
+}
+
 bool Timer::Read(const Access& a, std::uint32_t* v) {
-  const bool adv = kind_ == Kind::kAdvanced;
-  switch (a.offset) {
-    case 0x00:
-      *v = cr1_;
-      return true;
-    case 0x04:
-      *v = cr2_;
-      return true;
-    case 0x08:
-      *v = smcr_;
-      return true;
-    case 0x0C:
-      *v = dier_;
-      return true;
-    case 0x10:
-      *v = sr_;
-      return true;
-    case 0x14:
-      *v = 0;
-      return true;
-    case 0x18:
-      *v = ccmr1_;
-      return true;
-    case 0x1C:
-      *v = ccmr2_;
-      return true;
-    case 0x20:
-      *v = ccer_;
-      return true;
-    case 0x24:
-      *v = cnt_;
-      return true;
-    case 0x28:
-      *v = psc_;
-      return true;
-    case 0x2C:
-      *v = arr_;
-      return true;
-    case 0x34:
-    case 0x38:
-    case 0x3C:
-    case 0x40:
-      *v = ccr_[(a.offset - 0x34) / 4];
-      return true;
-    case 0x58:
-      *v = ecr_;
-      return true;
-    case 0x5C:
-      *v = tisel_;
-      return true;
-    case 0x60:
-      *v = af1_;
-      return true;
-    case 0x64:
-      *v = af2_;
-      return true;
-    case 0x3DC:
-      *v = dcr_;
-      return true;
-    case 0x3E0:
-      *v = 0;
-      return true;
-    default:
-      break;
+  if (const std::uint32_t* ccr = Ccr(a.offset)) {
+    *v = *ccr;
+    return true;
   }
-  if (!adv) return false;
-  switch (a.offset) {
-    case 0x30:
-      *v = rcr_;
-      return true;
-    case 0x44:
-      *v = bdtr_;
-      return true;
-    case 0x48:
-      *v = ccr_[4];
-      return true;
-    case 0x4C:
-      *v = ccr_[5];
-      return true;
-    case 0x50:
-      *v = ccmr3_;
-      return true;
-    case 0x54:
-      *v = dtr2_;
-      return true;
-    default:
-      return false;
-  }
+  return ReadTableRegister(Registers(), *this, a.offset, v) ||
+         (kind_ == Kind::kAdvanced &&
+          ReadTableRegister(AdvancedRegisters(), *this, a.offset, v));
 }
 
 bool Timer::Write(const Access& a) {
   const bool adv = kind_ == Kind::kAdvanced;
-  const std::uint32_t v = a.value & a.mask;
+  if (a.offset == 0x14) {
+    if (a.value & a.mask & 1u) {  // UG
+      cnt_ = (Cms() == 0 && CountingDown()) ? arr_ : 0;
+      psc_count_ = 0;
+      down_ = false;
+      LoadShadows();
+      rep_ = rcr_;
+      if (!(cr1_ & kUrs) && !(cr1_ & kUdis)) sr_ |= 1u;
+    }
+    return true;
+  }
+  if (a.offset == 0x20 && adv) {
+    a.Apply(&ccer_, 0x0033FFFFu);
+    return true;
+  }
+  if (std::uint32_t* ccr = Ccr(a.offset)) {
+    const std::size_t i = static_cast<std::size_t>(ccr - ccr_.data());
+    if (i >= 4) {
+      a.Apply(ccr);
+      return true;
+    }
+    a.Apply(ccr, 0xFFFFu);
+    const int ch = static_cast<int>(i) + 1;
+    const std::uint32_t m = CcmrOf(ch, ccmr1_, ccmr2_);
+    if (!((m >> (3 + 8 * Slot(ch))) & 1u)) ccr_active_[i] = ccr_[i];  // no OCxPE
+    return true;
+  }
+  const std::uint32_t cr1_before = cr1_;
+  if (!WriteTableRegister(Registers(), *this, a)) {
+    return adv && WriteTableRegister(AdvancedRegisters(), *this, a);
+  }
   switch (a.offset) {
-    case 0x00: {
-      const std::uint32_t before = cr1_;
-      a.Apply(&cr1_, 0x1BFFu);
+    case 0x00:
       // DIR is read-only in centre-aligned mode (RM0440 TIMx_CR1.DIR).
-      if (Cms() != 0) cr1_ = (cr1_ & ~(1u << 4)) | (before & (1u << 4));
+      if (Cms() != 0) cr1_ = (cr1_ & ~(1u << 4)) | (cr1_before & (1u << 4));
       if ((cr1_ & (1u << 3)) && !reported_mode_) {
         reported_mode_ = true;
         log_->Report(now_, name_, "one-pulse mode (CR1.OPM) is not modelled");
       }
-      return true;
-    }
-    case 0x04:
-      a.Apply(&cr2_);
-      return true;
+      break;
     case 0x08:
-      a.Apply(&smcr_);
       if (Sms() != 0 && !EncoderMode()) {
         log_->Report(now_, name_,
                      "SMCR.SMS = " + std::to_string(Sms()) +
                          ": only the quadrature encoder modes are modelled");
       }
-      return true;
-    case 0x0C:
-      a.Apply(&dier_);
-      return true;
-    case 0x10:
-      sr_ &= (v | ~a.mask);
-      return true;  // rc_w0: writing 0 clears
-    case 0x14:
-      if (v & 1u) {  // UG
-        cnt_ = (Cms() == 0 && CountingDown()) ? arr_ : 0;
-        psc_count_ = 0;
-        down_ = false;
-        LoadShadows();
-        rep_ = rcr_;
-        if (!(cr1_ & kUrs) && !(cr1_ & kUdis)) sr_ |= 1u;
-      }
-      return true;
+      break;
     case 0x18:
-    case 0x1C: {
-      std::uint32_t* reg = a.offset == 0x18 ? &ccmr1_ : &ccmr2_;
-      a.Apply(reg);
+    case 0x1C:
       for (int s = 0; s < 2; ++s) {
         const int ch = (a.offset == 0x18 ? 1 : 3) + s;
-        const unsigned cc_s = (*reg >> (8 * s)) & 3u;
+        const std::uint32_t reg = a.offset == 0x18 ? ccmr1_ : ccmr2_;
+        const unsigned cc_s = (reg >> (8 * s)) & 3u;
         const unsigned m = OcMode(ch);
         if (cc_s == 0 && m > 7) {
           log_->Report(now_, name_,
@@ -507,77 +476,14 @@ bool Timer::Write(const Access& a) {
                            " (retriggerable/combined/asymmetric PWM) is not modelled");
         }
       }
-      return true;
-    }
-    case 0x20:
-      a.Apply(&ccer_, adv ? 0x0033FFFFu : 0x0000BBBBu);
-      return true;
-    case 0x24:
-      a.Apply(&cnt_, 0xFFFFu);
-      return true;
-    case 0x28:
-      a.Apply(&psc_, 0xFFFFu);
-      return true;  // always preloaded
+      break;
     case 0x2C:
-      a.Apply(&arr_, 0xFFFFu);
       if (!(cr1_ & kArpe)) arr_active_ = arr_;
-      return true;
-    case 0x34:
-    case 0x38:
-    case 0x3C:
-    case 0x40: {
-      const std::size_t i = (a.offset - 0x34) / 4;
-      a.Apply(&ccr_[i], 0xFFFFu);
-      const int ch = static_cast<int>(i) + 1;
-      const std::uint32_t m = CcmrOf(ch, ccmr1_, ccmr2_);
-      if (!((m >> (3 + 8 * Slot(ch))) & 1u)) ccr_active_[i] = ccr_[i];  // no OCxPE
-      return true;
-    }
-    case 0x58:
-      a.Apply(&ecr_);
-      return true;
-    case 0x5C:
-      a.Apply(&tisel_);
-      return true;
-    case 0x60:
-      a.Apply(&af1_);
-      return true;
-    case 0x64:
-      a.Apply(&af2_);
-      return true;
-    case 0x3DC:
-      a.Apply(&dcr_);
-      return true;
-    case 0x3E0:
-      return true;
+      break;
     default:
       break;
   }
-  if (!adv) return false;
-  switch (a.offset) {
-    case 0x30:
-      a.Apply(&rcr_, 0xFFFFu);
-      return true;
-    case 0x44: {
-      // LOCK levels are not modelled; MOE is what gates the outputs.
-      a.Apply(&bdtr_);
-      return true;
-    }
-    case 0x48:
-      a.Apply(&ccr_[4]);
-      return true;
-    case 0x4C:
-      a.Apply(&ccr_[5]);
-      return true;
-    case 0x50:
-      a.Apply(&ccmr3_);
-      return true;
-    case 0x54:
-      a.Apply(&dtr2_);
-      return true;
-    default:
-      return false;
-  }
+  return true;
 }
 
 }  // namespace mjc::g474model

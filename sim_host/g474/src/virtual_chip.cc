@@ -1,15 +1,10 @@
 #include "mjc/g474model/virtual_chip.h"
 
-#include <cstdio>
 #include <string>
+#include <utility>
 
 namespace mjc::g474model {
 namespace {
-std::string Hex(std::uint32_t v) {
-  char b[16];
-  std::snprintf(b, sizeof b, "0x%08X", v);
-  return b;
-}
 constexpr int kIrqs[] = {irq::kFlash,  irq::kFdcan1It0, irq::kFdcan1It1,
                          irq::kTim1Up, irq::kTim3,      irq::kSpi1};
 }  // namespace
@@ -47,28 +42,7 @@ VirtualChip::VirtualChip(ChipConfig config)
   rcc_.SetClockChangeHook([this] { CheckClocks(); });
   pwr_.SetChangeHook([this] { CheckClocks(); });
   rcc_.SetPeripheralResetHook([this](Gate g) {
-    switch (g) {
-      case Gate::kTim1:
-        tim1_.Reset();
-        break;
-      case Gate::kTim3:
-        tim3_.Reset();
-        break;
-      case Gate::kSpi1:
-        spi1_.Reset();
-        break;
-      case Gate::kFdcan:
-        fdcan1_.Reset();
-        break;
-      case Gate::kPwr:
-        pwr_.Reset();
-        break;
-      default:
-        if (g >= Gate::kGpioA && g <= Gate::kGpioG) {
-          gpio_[static_cast<std::size_t>(g) - static_cast<std::size_t>(Gate::kGpioA)]
-              ->Reset();
-        }
-    }
+    if (Peripheral* block = GatedBlock(g)) block->Reset();
   });
   iwdg_.SetExpiryHook([this] { reset_pending_ = ResetCause::kIwdg; });
   cortex_.SetResetRequestHook([this] { reset_pending_ = ResetCause::kSoftware; });
@@ -330,11 +304,34 @@ void VirtualChip::Sync(Picoseconds t) {
   if (reset_pending_) DoReset(*reset_pending_);
 }
 
+Peripheral* VirtualChip::GatedBlock(Gate g) {
+  switch (g) {
+    case Gate::kTim1:
+      return &tim1_;
+    case Gate::kTim3:
+      return &tim3_;
+    case Gate::kSpi1:
+      return &spi1_;
+    case Gate::kFdcan:
+      return &fdcan1_;
+    case Gate::kPwr:
+      return &pwr_;
+    default:
+      if (g >= Gate::kGpioA && g <= Gate::kGpioG) {
+        return gpio_[static_cast<std::size_t>(g) - static_cast<std::size_t>(Gate::kGpioA)]
+            .get();
+      }
+      return nullptr;
+  }
+}
+
 void VirtualChip::UpdateGates() {
-  tim1_.SetClockOn(rcc_.ClockEnabled(Gate::kTim1));
-  tim3_.SetClockOn(rcc_.ClockEnabled(Gate::kTim3));
-  spi1_.SetClockOn(rcc_.ClockEnabled(Gate::kSpi1));
-  fdcan1_.SetClockOn(rcc_.ClockEnabled(Gate::kFdcan));
+  // The blocks whose models stop counting without their clock.
+  const std::pair<Peripheral*, Gate> counting[] = {{&tim1_, Gate::kTim1},
+                                                   {&tim3_, Gate::kTim3},
+                                                   {&spi1_, Gate::kSpi1},
+                                                   {&fdcan1_, Gate::kFdcan}};
+  for (const auto& [block, gate] : counting) block->SetClockOn(rcc_.ClockEnabled(gate));
 }
 
 // ── Bus ───────────────────────────────────────────────────────────────────────────

@@ -12,14 +12,14 @@
 
 namespace mjc::boot::qemu {
 
-inline constexpr BootLayout kQemuLayout{
-    .flash_base = 0x00000000u,
-    .app_first_page = 8,
-    .app_pages = 120,
-    .identity_page_a = 252,
-    .identity_page_b = 253,
-    .stack_ranges = {{{0x20000000u, 0x20400000u}, {0x20000000u, 0x20400000u}}},
-};
+// The board's pages and regions (kG474Layout) with flash at 0 and the stacks in QEMU's
+// 4 MB of SRAM.
+inline constexpr BootLayout kQemuLayout = [] {
+  BootLayout layout = kG474Layout;
+  layout.flash_base = 0x00000000u;
+  layout.stack_ranges = {{{0x20000000u, 0x20400000u}, {0x20000000u, 0x20400000u}}};
+  return layout;
+}();
 static_assert(kQemuLayout.RegionAddress() == 0x4000u);
 static_assert(kQemuLayout.ImageAddress() == 0x4200u);
 

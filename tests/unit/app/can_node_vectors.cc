@@ -635,4 +635,126 @@ MJC_VECTOR_TEST(JointBoard, EntersItsBootloaderOnceTheHoldsAnswerIsOut) {
   VT_EXPECT_EQ(entry.answers_out, 1u);
 }
 
+// Encoders that turn a little every tick, so that each angle sample differs from the
+// one before it.
+struct TurningIo {
+  Sample ISR_Read() {
+    ++reads;
+    Sample s;
+    s.motor_count = static_cast<std::uint16_t>(3u * reads);
+    s.joint_frame = EncodeJointFrame(static_cast<std::uint16_t>(reads % 16384u), false);
+    return s;
+  }
+  void ISR_Write(const Actuation&) {}
+  std::uint32_t reads = 0;
+};
+
+// A board's angle samples in the order it sent them, from either layout, and what the
+// batches' counts say.
+struct AngleLog {
+  static constexpr std::size_t kMost = 64;
+  std::int32_t motor[kMost] = {};
+  std::int32_t joint[kMost] = {};
+  std::size_t samples = 0;
+  std::uint32_t singles = 0, batches = 0;
+  std::uint32_t next_first = 0;    // the first_sample the next batch should carry
+  std::uint32_t count_breaks = 0;  // batches whose first_sample was not next_first
+  std::uint32_t gap_samples = 0;   // samples skipped by those
+  std::uint32_t other_fd = 0;      // FD frames that are not a batch
+  void Keep(Angle m, Angle j) {
+    if (samples < kMost) {
+      motor[samples] = m.raw();
+      joint[samples] = j.raw();
+    }
+    ++samples;
+  }
+  void Take(const CanFrame& f) {
+    TelemetryAngles a;
+    TelemetryAngleBatch b;
+    if (Decode(f, &a) == DecodeError::kOk) {
+      ++singles;
+      Keep(a.motor, a.joint);
+    } else if (Decode(f, &b) == DecodeError::kOk) {
+      if (b.first_sample != next_first) {
+        ++count_breaks;
+        gap_samples += b.first_sample - next_first;
+      }
+      next_first = b.first_sample + TelemetryAngleBatch::kSamples;
+      ++batches;
+      for (std::size_t i = 0; i < TelemetryAngleBatch::kSamples; ++i) {
+        Keep(b.motor[i], b.joint[i]);
+      }
+    } else if (f.fd) {
+      ++other_fd;
+    }
+  }
+};
+
+struct TurningBoard {
+  explicit TurningBoard(bool fd) : app(ControlConfig{}), node(&app, Config(fd)) {}
+  static CanNodeConfig Config(bool fd) {
+    CanNodeConfig c;
+    c.fd = fd;
+    return c;
+  }
+  void Run(int ticks, bool drain = true) {
+    for (int i = 0; i < ticks; ++i) {
+      app.ISR_Tick(io);
+      node.Poll();
+      for (CanFrame f; drain && node.PopTx(&f);) log.Take(f);
+    }
+  }
+  JointApp app;
+  CanNode node;
+  TurningIo io;
+  AngleLog log;
+};
+
+// On a CAN FD link the board sends its angle samples five to a TelemetryAngleBatch,
+// numbered without a gap; the samples are the ones the same board sends one a frame on
+// a classical link (the reference), in the same order.
+MJC_VECTOR_TEST(CanNode, FdLinkBatchesTheAngleSamplesWithACount) {
+  static TurningBoard classic(false);
+  static TurningBoard fd(true);
+  classic.Run(400);
+  fd.Run(400);
+  // 400 ticks at 10 kHz: 40 samples at 1 kHz, 8 batches.
+  VT_EXPECT_EQ(classic.log.singles, 40u);
+  VT_EXPECT_EQ(classic.log.batches, 0u);
+  VT_EXPECT_EQ(fd.log.singles, 0u);
+  VT_EXPECT_EQ(fd.log.batches, 8u);
+  VT_EXPECT_EQ(fd.log.samples, 40u);
+  VT_EXPECT_EQ(fd.log.count_breaks, 0u);
+  VT_EXPECT_EQ(fd.log.next_first, 40u);
+  VT_EXPECT_EQ(fd.log.other_fd, 0u);
+  int differing = 0, changes = 0;
+  for (std::size_t i = 0; i < 40; ++i) {
+    differing += fd.log.motor[i] != classic.log.motor[i] ? 1 : 0;
+    differing += fd.log.joint[i] != classic.log.joint[i] ? 1 : 0;
+    if (i > 0) changes += classic.log.joint[i] != classic.log.joint[i - 1] ? 1 : 0;
+  }
+  VT_EXPECT_EQ(differing, 0);
+  VT_EXPECT_EQ(changes, 39);  // the samples tell each other apart
+}
+
+// A batch the transmit queue had no room for is lost, and the count says so: the next
+// batch that goes out starts a multiple of five samples later.
+MJC_VECTOR_TEST(CanNode, ABatchLostOnTheWayOutLeavesAGapInTheCount) {
+  static TurningBoard fd(true);
+  fd.Run(100);
+  const std::uint32_t dropped_before = fd.node.counters().tx_dropped;
+  // 80 batches and the other telemetry: more than the 64 frames the queue holds.
+  fd.Run(4000, /*drain=*/false);
+  fd.Run(100);
+  const std::uint32_t dropped = fd.node.counters().tx_dropped - dropped_before;
+  VT_EXPECT_TRUE(dropped > 0);
+  VT_EXPECT_EQ(fd.log.count_breaks, 1u);
+  VT_EXPECT_TRUE(fd.log.gap_samples > 0);
+  VT_EXPECT_EQ(fd.log.gap_samples % TelemetryAngleBatch::kSamples, 0u);
+  // Every batch is either heard or among the frames the queue dropped.
+  VT_EXPECT_TRUE(fd.log.gap_samples / TelemetryAngleBatch::kSamples <= dropped);
+  VT_EXPECT_EQ(fd.log.batches * TelemetryAngleBatch::kSamples + fd.log.gap_samples,
+               fd.log.next_first);
+}
+
 }  // namespace

@@ -60,6 +60,80 @@ std::array<protocol::CanFrame, 7> WindowFrames(std::uint16_t repetition) {
           protocol::Encode(residual, kNode)};
 }
 
+// Batched angle telemetry (CAN FD): one batch of five samples, sample n's angles
+// derived from n, so a sample out of place would show.
+protocol::CanFrame AngleBatch(std::uint32_t first_sample) {
+  protocol::TelemetryAngleBatch b;
+  b.first_sample = first_sample;
+  for (std::size_t i = 0; i < b.motor.size(); ++i) {
+    const auto n = static_cast<double>(first_sample + i);
+    b.motor[i] = Angle::Quantize(0.001 * n);
+    b.joint[i] = Angle::Quantize(-0.0005 * n);
+  }
+  return protocol::Encode(b, kNode);
+}
+
+TEST(AngleBatches, DecodeToTheSampleStreamAndALostFrameIsCounted) {
+  auto bus = InProcessBus::Create();
+  auto board = bus->Connect();
+  auto host = bus->Connect();
+  BoardClient client(host.get(), kNode);
+  client.KeepAngles(true);
+  std::string why;
+  for (std::uint32_t batch = 0; batch < 6; ++batch) {
+    if (batch == 3) continue;  // lost on the bus
+    ASSERT_TRUE(board->Send(AngleBatch(5 * batch), &why)) << why;
+  }
+  ASSERT_TRUE(client.Poll(50, &why)) << why;
+  const auto samples = client.TakeAngles();
+  // Batches 0, 1, 2, 4, 5: samples 0..14 and 20..29, nothing made up for 15..19.
+  ASSERT_EQ(samples.size(), 25u);
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const double n = static_cast<double>(k < 15 ? k : k + 5);
+    EXPECT_NEAR(samples[k].motor_rad, 0.001 * n, 1e-7) << k;
+    EXPECT_NEAR(samples[k].joint_rad, -0.0005 * n, 1e-7) << k;
+  }
+  EXPECT_NEAR(client.status().motor_rad, 0.029, 1e-7);  // the last sample's
+  const AngleSequence& seq = client.angle_sequence();
+  EXPECT_EQ(seq.batches(), 5u);
+  EXPECT_EQ(seq.lost_frames(), 1u);
+  EXPECT_EQ(seq.lost_samples(), 5u);
+  EXPECT_EQ(seq.restarts(), 0u);
+  EXPECT_EQ(client.malformed(), 0u);
+
+  // The board restarts (its count begins at 0 again): no loss, a restart.
+  ASSERT_TRUE(board->Send(AngleBatch(0), &why)) << why;
+  ASSERT_TRUE(board->Send(AngleBatch(5), &why)) << why;
+  // A batch in a classical frame is refused and counted, not decoded.
+  protocol::CanFrame classical = AngleBatch(10);
+  classical.fd = false;
+  classical.length = 8;
+  ASSERT_TRUE(board->Send(classical, &why)) << why;
+  ASSERT_TRUE(client.Poll(50, &why)) << why;
+  EXPECT_EQ(client.TakeAngles().size(), 10u);
+  EXPECT_EQ(seq.restarts(), 1u);
+  EXPECT_EQ(seq.lost_frames(), 1u);
+  EXPECT_EQ(client.malformed(), 1u);
+}
+
+TEST(AngleBatches, TheCountWrapsWithoutALossAndTwoLostFramesCountTwice) {
+  AngleSequence seq;
+  protocol::TelemetryAngleBatch b;
+  b.first_sample = 0xFFFFFFFAu;  // 2^32 - 6: the next batch starts at 4294967295
+  seq.OnBatch(b);
+  b.first_sample = 0xFFFFFFFFu;
+  seq.OnBatch(b);
+  b.first_sample = 4;  // wrapped
+  seq.OnBatch(b);
+  EXPECT_EQ(seq.lost_frames(), 0u);
+  b.first_sample = 19;  // 9 and 14 lost
+  seq.OnBatch(b);
+  EXPECT_EQ(seq.lost_frames(), 2u);
+  EXPECT_EQ(seq.lost_samples(), 10u);
+  EXPECT_EQ(seq.batches(), 4u);
+  EXPECT_EQ(seq.restarts(), 0u);
+}
+
 class WindowAssembly : public ::testing::Test {
  protected:
   // Sends window `repetition` without the parts listed in `lost` (0 header … 4 ticks,

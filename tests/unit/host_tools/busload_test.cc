@@ -50,4 +50,42 @@ TEST(BusLoad, HighestClassicalTelemetryRateByHand) {
   EXPECT_NEAR(hz, 0.3948 / 1.08e-3, 1e-9);
 }
 
+// The batched layout by hand. A 48-byte CAN FD frame with bit-rate switching, fields
+// of ISO 11898-1: at 1 Mbit/s SOF, 11 identifier bits, RRS, IDE, FDF, res, BRS (17) with
+// at most 4 stuff bits, and CRC delimiter, ACK slot and delimiter, EOF (7) and the
+// 3-bit intermission (13): 34 µs. At 5 Mbit/s ESI, 4 DLC bits and 384 data bits (389)
+// with at most ⌈389/4⌉ = 98 dynamic stuff bits, the 4-bit stuff count, a 21-bit CRC
+// (above 16 bytes) and its 7 fixed stuff bits (one before the stuff count, one every
+// 4 bits after: 1 + 24/4): 519 bits, 103.8 µs. 137.8 µs a frame.
+TEST(BusLoad, FortyEightByteFdFrameByHand) {
+  EXPECT_NEAR(FrameTimeS(48, BusTiming{true, 1e6, 5e6}), 137.8e-6, 1e-12);
+}
+
+TEST(BusLoad, EightBoardsBatchedAtOneKilohertzByHand) {
+  // Eight boards, 1 kHz angles five to a 48-byte frame: 8 × 200 × 137.8 µs = 0.22048.
+  // The rest on FD 1/5 Mbit/s: an 8-byte frame is 34 µs + (69 + 18 + 4 + 17 + 6) bits
+  // at 5 Mbit/s = 56.8 µs, a 5-byte WindowStart 34 µs + (45 + 12 + 27) / 5 = 50.8 µs,
+  // the 3-byte host heartbeat 34 µs + (29 + 8 + 27) / 5 = 46.8 µs. A board's 88 8-byte
+  // frames/s (as in the classical case above) take 4.9984 ms/s, its WindowStarts
+  // 0.2032 ms/s, its host heartbeats 0.468 ms/s: 5.6696 ms/s, 0.0453568 for eight.
+  const protocol::TelemetryRates defaults;
+  const BusTiming fd{true, 1e6, 5e6};
+  const auto batched = host::ComputeBusLoad(defaults, 8, fd);
+  EXPECT_NEAR(batched.total_fraction, 0.22048 + 0.0453568, 1e-9);
+  EXPECT_LE(batched.total_fraction, 0.30);
+  ASSERT_FALSE(batched.lines.empty());
+  EXPECT_EQ(batched.lines.front().message, "TelemetryAngleBatch");
+  EXPECT_EQ(batched.lines.front().payload_bytes, 48);
+  EXPECT_NEAR(batched.lines.front().hz_per_board, 200.0, 1e-12);
+  // One sample a frame on the same bus, the classical layout: 8 × 1000 × 56.8 µs more.
+  const auto single = host::ComputeBusLoad(defaults, 8, fd, host::AngleLayout::kSingle);
+  EXPECT_NEAR(single.total_fraction, 0.4544 + 0.0453568, 1e-9);
+  // Classical CAN keeps one sample a frame.
+  const auto classic = host::ComputeBusLoad(defaults, 8, BusTiming{false, 1e6, 1e6});
+  EXPECT_EQ(classic.lines.front().message, "TelemetryAngles");
+  // The FD rate that fills half the bus: (0.5 − 0.0453568) / (8 × 137.8 µs / 5).
+  EXPECT_NEAR(host::MaxTelemetryHz(defaults, 8, fd, 0.5),
+              (0.5 - 0.0453568) / (8 * 137.8e-6 / 5), 1e-6);
+}
+
 }  // namespace

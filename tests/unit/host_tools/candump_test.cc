@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "mjc/protocol/codec.h"
+
 namespace {
 
 using namespace mjc;
@@ -334,6 +336,40 @@ TEST(CandumpLine, OnlyStandardDataFramesAreTheProtocols) {
     ASSERT_TRUE(line) << other << ": " << why;
     EXPECT_FALSE(ToProtocolFrame(*line)) << other;
   }
+}
+
+// A batch of angle samples as candump -L prints a CAN FD frame with bit-rate switching
+// ("##" and the flags digit 1 = CANFD_BRS), written out by hand from the layout
+// (messages.h): node 2, first_sample 0x00000105, sample 0 motor raw 0x00010000 (2^-8
+// rad) and joint raw -1, sample 4 motor raw 0x7FFFFFFF, the rest zero.
+TEST(CandumpLine, ABatchedAngleFrameParsesAndDecodes) {
+  const std::string line =
+      "(1795253300.000001) vcan0 252##1"
+      "05010000"
+      "00000100FFFFFFFF"
+      "0000000000000000"
+      "0000000000000000"
+      "0000000000000000"
+      "FFFFFF7F00000000"
+      "00000000";
+  std::string why;
+  const auto got = ParseCandumpLine(line, &why);
+  ASSERT_TRUE(got) << why;
+  EXPECT_TRUE(got->fd);
+  EXPECT_EQ(got->flags, CANFD_BRS);
+  EXPECT_EQ(got->length, 48);
+  EXPECT_EQ(FormatCandumpLine(*got), line);
+  const auto frame = ToProtocolFrame(*got);
+  ASSERT_TRUE(frame);
+  protocol::TelemetryAngleBatch b;
+  ASSERT_EQ(protocol::Decode(*frame, &b), protocol::DecodeError::kOk);
+  EXPECT_EQ(protocol::NodeOf(frame->id), 2);
+  EXPECT_EQ(b.first_sample, 0x105u);
+  EXPECT_EQ(b.motor[0].raw(), 0x10000);
+  EXPECT_EQ(b.joint[0].raw(), -1);
+  EXPECT_EQ(b.motor[4].raw(), 0x7FFFFFFF);
+  EXPECT_EQ(b.joint[4].raw(), 0);
+  EXPECT_DOUBLE_EQ(b.motor[0].ToDouble(), 1.0 / 256.0);
 }
 
 }  // namespace

@@ -2,7 +2,8 @@
 
 usage: /usr/bin/python3 canmatrix_decode.py DBC FRAMES
 FRAMES: one frame a line, "<id hex> <payload hex>". Prints one JSON object a line:
-{"name": frame name, "raw": {signal: int}, "phys": {signal: "decimal string"}}, or
+{"name": frame name, "fd": whether the DBC makes it a CAN FD frame, "raw": {signal: int},
+"phys": {signal: "decimal string"}}, or
 {"error": "..."} for a frame the DBC does not know.
 """
 import json
@@ -26,6 +27,7 @@ def main():
             decoded = frame.decode(bytes.fromhex(payload))
             print(json.dumps({
                 "name": frame.name,
+                "fd": bool(frame.is_fd),
                 "raw": {k: int(v.raw_value) for k, v in decoded.items()},
                 "phys": {k: str(v.phys_value) for k, v in decoded.items()},
             }))

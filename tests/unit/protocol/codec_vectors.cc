@@ -49,9 +49,7 @@ M RandomMessage(vt::Rng& rng) {
   M m{};
   std::apply(
       [&](const auto&... s) {
-        ((m.*(s.member) =
-              RandomValue<std::remove_reference_t<decltype(m.*(s.member))>>(rng)),
-         ...);
+        ((s.Ref(m) = RandomValue<std::remove_reference_t<decltype(s.Ref(m))>>(rng)), ...);
       },
       Message<M>::kSignals);
   return m;
@@ -60,9 +58,8 @@ M RandomMessage(vt::Rng& rng) {
 template <class M>
 bool FieldsEqual(const M& a, const M& b) {
   bool eq = true;
-  std::apply(
-      [&](const auto&... s) { ((eq = eq && (a.*(s.member) == b.*(s.member))), ...); },
-      Message<M>::kSignals);
+  std::apply([&](const auto&... s) { ((eq = eq && (s.Get(a) == s.Get(b))), ...); },
+             Message<M>::kSignals);
   return eq;
 }
 
@@ -77,7 +74,8 @@ int RoundTripFailures(vt::Rng& rng, int samples) {
     // A broadcast message names no node.
     const std::uint8_t to = Message<M>::kBroadcast ? kEveryNode : node;
     if (Decode(frame, &got) != DecodeError::kOk || !FieldsEqual(sent, got) ||
-        NodeOf(frame.id) != to || frame.length != Message<M>::kLength) {
+        NodeOf(frame.id) != to || frame.length != Message<M>::kLength ||
+        frame.fd != Message<M>::kFd) {
       ++failures;
     }
   }
@@ -112,6 +110,70 @@ MJC_VECTOR_TEST(ProtocolCodec, LittleEndianLayoutAsTheDbcSays) {
   const CanFrame hf = Encode(h, 1);
   VT_EXPECT_EQ(hf.data[1], 0x03);
   VT_EXPECT_EQ(hf.data[2], 202);
+}
+
+// TelemetryAngleBatch, written out by hand from its table: a CAN FD frame of 48 bytes,
+// identifier 0x25 << 4 | node; first_sample at bytes 0..3, then sample i's motor angle
+// at bytes 4 + 8i and its joint angle at 8 + 8i (raw Q-format, little-endian); bytes
+// 44..47 zero.
+MJC_VECTOR_TEST(ProtocolCodec, AngleBatchLayoutByHand) {
+  TelemetryAngleBatch m;
+  m.first_sample = 0x0A0B0C0Du;
+  m.motor[0] = Angle::FromRaw(0x01020304);
+  m.joint[0] = Angle::FromRaw(-2);
+  m.motor[2] = Angle::FromRaw(0x11223344);
+  m.motor[4] = Angle::FromRaw(0x7FFFFFFF);
+  m.joint[4] = Angle::FromRaw(-0x7FFFFFFF - 1);
+  const CanFrame f = Encode(m, 3);
+  VT_EXPECT_EQ(f.id, 0x253u);
+  VT_EXPECT_TRUE(f.fd);
+  VT_EXPECT_EQ(f.length, 48);
+  const std::uint8_t want[48] = {
+      0x0D, 0x0C, 0x0B, 0x0A,                          // first_sample
+      0x04, 0x03, 0x02, 0x01, 0xFE, 0xFF, 0xFF, 0xFF,  // sample 0
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // sample 1
+      0x44, 0x33, 0x22, 0x11, 0x00, 0x00, 0x00, 0x00,  // sample 2
+      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // sample 3
+      0xFF, 0xFF, 0xFF, 0x7F, 0x00, 0x00, 0x00, 0x80,  // sample 4
+      0x00, 0x00, 0x00, 0x00};                         // padding
+  int differing = 0;
+  for (std::size_t i = 0; i < 48; ++i) differing += f.data[i] != want[i] ? 1 : 0;
+  VT_EXPECT_EQ(differing, 0);
+  for (std::size_t i = 48; i < 64; ++i) differing += f.data[i] != 0 ? 1 : 0;
+  VT_EXPECT_EQ(differing, 0);
+
+  // The bytes by hand decode to the values.
+  CanFrame by_hand;
+  by_hand.id = 0x253u;
+  by_hand.fd = true;
+  by_hand.length = 48;
+  for (std::size_t i = 0; i < 48; ++i) by_hand.data[i] = want[i];
+  TelemetryAngleBatch got;
+  VT_EXPECT_TRUE(Decode(by_hand, &got) == DecodeError::kOk);
+  VT_EXPECT_EQ(got.first_sample, 0x0A0B0C0Du);
+  VT_EXPECT_EQ(got.motor[0].raw(), 0x01020304);
+  VT_EXPECT_EQ(got.joint[0].raw(), -2);
+  VT_EXPECT_EQ(got.motor[2].raw(), 0x11223344);
+  VT_EXPECT_EQ(got.motor[4].raw(), 0x7FFFFFFF);
+  VT_EXPECT_EQ(got.joint[4].raw(), -0x7FFFFFFF - 1);
+
+  // FD only, 48 bytes only; a refusal changes nothing.
+  got.first_sample = 7;
+  CanFrame bad = by_hand;
+  bad.fd = false;
+  VT_EXPECT_TRUE(Decode(bad, &got) == DecodeError::kWrongLength);
+  bad = by_hand;
+  bad.length = 32;
+  VT_EXPECT_TRUE(Decode(bad, &got) == DecodeError::kWrongLength);
+  bad = by_hand;
+  bad.length = 64;
+  VT_EXPECT_TRUE(Decode(bad, &got) == DecodeError::kWrongLength);
+  bad = by_hand;
+  bad.id = MakeId(static_cast<std::uint8_t>(Function::kTelemetryAngleBatch), 0);
+  VT_EXPECT_TRUE(Decode(bad, &got) == DecodeError::kBadNode);
+  VT_EXPECT_EQ(got.first_sample, 7u);
+  // A board's message: its frames are signs of the board's life.
+  VT_EXPECT_TRUE(SentByBoard(static_cast<std::uint8_t>(Function::kTelemetryAngleBatch)));
 }
 
 MJC_VECTOR_TEST(ProtocolCodec, MalformedFramesAreRefusedAndChangeNothing) {

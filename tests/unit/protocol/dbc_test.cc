@@ -43,6 +43,7 @@ TEST(Dbc, CommittedFileIsTheGeneratedOne) {
 
 struct Expected {
   std::string name;
+  bool fd = false;
   std::vector<std::tuple<std::string, std::int64_t, double>>
       signals;  // name, raw, factor
 };
@@ -56,6 +57,7 @@ void AddFrames(vt::Rng& rng, std::ofstream& frames, std::vector<Expected>& expec
     const auto node = static_cast<std::uint8_t>(1 + rng.Next() % 8u);
     f.id = IdOf<M>(node);
     f.length = Message<M>::kLength;
+    f.fd = Message<M>::kFd;
     for (auto& b : f.data) b = static_cast<std::uint8_t>(rng.Next());
     M m;
     if (Decode(f, &m) != DecodeError::kOk) continue;
@@ -70,13 +72,13 @@ void AddFrames(vt::Rng& rng, std::ofstream& frames, std::vector<Expected>& expec
     }
     frames << '\n';
     Expected e;
+    e.fd = Message<M>::kFd;
     e.name = std::string(Message<M>::kName) +
              (Message<M>::kBroadcast ? "" : "_J" + std::to_string(node));
     std::apply(
         [&](const auto&... s) {
-          ((e.signals.emplace_back(s.name,
-                                   std::decay_t<decltype(s)>::Wire::ToRaw(m.*(s.member)),
-                                   s.factor())),
+          ((e.signals.emplace_back(
+               s.name, std::decay_t<decltype(s)>::Wire::ToRaw(s.Get(m)), s.factor())),
            ...);
         },
         Message<M>::kSignals);
@@ -123,6 +125,7 @@ TEST(Dbc, IndependentDecoderReadsEverySignalWeEncode) {
     ASSERT_FALSE(j.contains("error")) << j.dump();
     const Expected& e = expected[index++];
     EXPECT_EQ(j["name"].get<std::string>(), e.name);
+    EXPECT_EQ(j["fd"].get<bool>(), e.fd) << e.name;
     for (const auto& [name, raw, factor] : e.signals) {
       ASSERT_TRUE(j["raw"].contains(name)) << e.name << "." << name;
       EXPECT_EQ(j["raw"][name].get<std::int64_t>(), raw) << e.name << "." << name;

@@ -45,10 +45,31 @@ struct BoardStatus {
   double motor_rad = 0, joint_rad = 0, torque_Nm = 0, power_W = 0, energy_J = 0;
 };
 
-// One TelemetryAngles frame: θ_m and θ_j in rad.
+// One angle sample (a TelemetryAngles frame, or one of a TelemetryAngleBatch's): θ_m
+// and θ_j in rad.
 struct AngleSample {
   double motor_rad = 0;
   double joint_rad = 0;
+};
+
+// The continuity of one board's batched angle telemetry (TelemetryAngleBatch, CAN FD):
+// each batch's first_sample must be the previous batch's plus kSamples. A gap is
+// counted as lost samples and lost frames and never filled in; a count that goes back
+// (the board restarted and counts from 0 again) starts over, counted as a restart.
+// Classical TelemetryAngles frames carry no count: a lost one is not seen.
+class AngleSequence {
+ public:
+  // Takes the next batch heard from the board.
+  void OnBatch(const protocol::TelemetryAngleBatch& batch);
+  std::uint64_t batches() const { return batches_; }
+  std::uint64_t lost_samples() const { return lost_samples_; }
+  std::uint64_t lost_frames() const { return lost_frames_; }
+  std::uint64_t restarts() const { return restarts_; }
+
+ private:
+  bool started_ = false;
+  std::uint32_t next_ = 0;  // the first_sample the next batch should carry
+  std::uint64_t batches_ = 0, lost_samples_ = 0, lost_frames_ = 0, restarts_ = 0;
 };
 
 // The host's heartbeat period. A board that has heard one stops a running motion
@@ -251,8 +272,9 @@ class BoardClient {
   // Windows completed since the last call.
   std::vector<BoardWindow> TakeWindows();
 
-  // Keeps every TelemetryAngles sample from now on (off by default, so a long-running
-  // client does not grow), until KeepAngles(false).
+  // Keeps every angle sample (TelemetryAngles, or each of a TelemetryAngleBatch's) from
+  // now on (off by default, so a long-running client does not grow), until
+  // KeepAngles(false).
   void KeepAngles(bool on) { keep_angles_ = on; }
   // The samples kept since the last call, in arrival order.
   std::vector<AngleSample> TakeAngles();
@@ -269,6 +291,9 @@ class BoardClient {
   // heartbeats: what a wait watches for signs of life and for the board's own clock.
   std::uint64_t frames() const { return frames_; }
   std::uint64_t heartbeats() const { return heartbeats_heard_; }
+  // The batched angle telemetry's continuity (CAN FD): frames lost on the way, seen as
+  // gaps in the batches' sample count.
+  const AngleSequence& angle_sequence() const { return angle_sequence_; }
   // Frames of this node the codec refused.
   std::uint64_t malformed() const { return malformed_; }
   // Windows dropped because a part was lost, malformed or out of order (each counted
@@ -327,6 +352,7 @@ class BoardClient {
   std::vector<BoardWindow> windows_;
   bool keep_angles_ = false;
   std::vector<AngleSample> angles_;
+  AngleSequence angle_sequence_;
   std::optional<protocol::CommandResult> last_result_;
   std::optional<protocol::ParamValue> last_param_;
   std::uint64_t frames_ = 0;

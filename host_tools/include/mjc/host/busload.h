@@ -28,6 +28,16 @@ struct BusTiming {
 // FD length) on `timing`, seconds.
 double FrameTimeS(int payload_bytes, const BusTiming& timing);
 
+// How a board sends its angle samples: one TelemetryAngles frame each (classical CAN),
+// or TelemetryAngleBatch::kSamples to a TelemetryAngleBatch frame (CAN FD). A board
+// batches when its link is FD, so the link's layout is LinkLayout(timing).
+enum class AngleLayout : std::uint8_t { kSingle, kBatched };
+AngleLayout LinkLayout(const BusTiming& timing);
+
+// Bus time of one angle sample in `layout` on `timing`: its frame's, shared by the
+// samples the frame carries, seconds.
+double AngleFrameS(AngleLayout layout, const BusTiming& timing);
+
 struct BusLoadLine {
   std::string message;
   int payload_bytes = 0;
@@ -42,21 +52,37 @@ struct BusLoad {
 
 // The load of `boards` boards transmitting at `rates` (the board's own telemetry
 // schedule) and their window summaries, plus the host's heartbeat to each board.
-// Payload lengths are the message table's (protocol/messages.h).
+// Payload lengths are the message table's (protocol/messages.h); the angles go in
+// `layout` (the link's by default).
 BusLoad ComputeBusLoad(const protocol::TelemetryRates& rates, int boards,
-                       const BusTiming& timing);
+                       const BusTiming& timing, AngleLayout layout);
+inline BusLoad ComputeBusLoad(const protocol::TelemetryRates& rates, int boards,
+                              const BusTiming& timing) {
+  return ComputeBusLoad(rates, boards, timing, LinkLayout(timing));
+}
 
-// The highest rate of the angle telemetry (the 1 kHz frame) that keeps `boards`
-// boards' total load at or below `budget` with the other rates as given; 0 if even the
-// rest does not fit.
+// The highest rate of the angle telemetry (samples per second and board, in `layout`)
+// that keeps `boards` boards' total load at or below `budget` with the other rates as
+// given; 0 if even the rest does not fit.
 double MaxTelemetryHz(protocol::TelemetryRates rates, int boards, const BusTiming& timing,
-                      double budget);
+                      double budget, AngleLayout layout);
+inline double MaxTelemetryHz(const protocol::TelemetryRates& rates, int boards,
+                             const BusTiming& timing, double budget) {
+  return MaxTelemetryHz(rates, boards, timing, budget, LinkLayout(timing));
+}
 
-std::string FormatBusLoad(const BusLoad& load, const BusTiming& timing, int boards);
+std::string FormatBusLoad(const BusLoad& load, const BusTiming& timing, int boards,
+                          AngleLayout layout);
+inline std::string FormatBusLoad(const BusLoad& load, const BusTiming& timing,
+                                 int boards) {
+  return FormatBusLoad(load, timing, boards, LinkLayout(timing));
+}
 
 // The whole report of `mjc busload`: `boards` boards at the default rates on CAN FD
-// (nominal/data bit rates) and on classical CAN at the nominal rate, and the highest
-// angle-telemetry rate each keeps within a 50 % budget.
+// (nominal/data bit rates; angles batched, as a board on an FD link sends them) and on
+// classical CAN at the nominal rate (one sample a frame), the FD load the classical
+// layout would cause, and the highest angle-telemetry rate each link keeps within a
+// 50 % budget.
 std::string BusLoadReport(int boards, double nominal_bps, double data_bps);
 
 }  // namespace mjc::host

@@ -39,6 +39,11 @@ struct CanNodeConfig {
   std::uint16_t host_timeout_ms = 300;
   // Largest setpoint speed while streaming, rad/s.
   AngularVelocity stream_rate = AngularVelocity::FromDouble(2.0);
+  // The board's link carries CAN FD (the G474's FDCAN runs FD with bit-rate switching):
+  // the angle telemetry then goes as TelemetryAngleBatch, kSamples samples a 48-byte
+  // frame, which eight boards at 1 kHz fit in with room to spare; on a classical link
+  // (false) one TelemetryAngles frame a sample, as classical CAN carries.
+  bool fd = false;
   // Who the board is (BoardInfo): sent at the first poll and then at rates.info_hz. The
   // board fills in its build, its reset cause and its instance.
   protocol::BoardInfo identity;
@@ -146,6 +151,8 @@ class CanNode {
   // A WindowStart when the last tick's setpoint entered a loading segment.
   void AnnounceWindow(const JointApp::Snapshot& last);
   void SendTelemetry(const JointApp::Snapshot& last);
+  // One angle sample: a frame of its own, or (FD) into the batch, sent once full.
+  void SendAngles(const Telemetry& t);
 
   JointApp* app_;
   CanNodeConfig config_;
@@ -166,6 +173,10 @@ class CanNode {
   protocol::IsoTpReceiver isotp_;
   CalibrationStore* store_;
   Cadence angles_, torque_, power_, energy_, control_, heartbeat_, info_;
+  // FD: the batch being filled and how many samples it holds; first_sample counts every
+  // angle sample the board has taken since its start.
+  protocol::TelemetryAngleBatch batch_;
+  std::size_t batch_fill_ = 0;
   // The setpoint's segment at the last poll: a change into a loading segment is a
   // window's start (AnnounceWindow).
   Segment last_segment_ = Segment::kIdle;

@@ -48,22 +48,19 @@
 namespace mjc::boot {
 
 // ImageCheck's numbers are BootError's.
-static_assert(static_cast<int>(ImageCheck::kNoImage) ==
-                  static_cast<int>(protocol::BootError::kNoImage) &&
-              static_cast<int>(ImageCheck::kBadHeader) ==
-                  static_cast<int>(protocol::BootError::kBadHeader) &&
-              static_cast<int>(ImageCheck::kWrongBoard) ==
-                  static_cast<int>(protocol::BootError::kWrongBoard) &&
-              static_cast<int>(ImageCheck::kWrongHardware) ==
-                  static_cast<int>(protocol::BootError::kWrongHardware) &&
-              static_cast<int>(ImageCheck::kBadLength) ==
-                  static_cast<int>(protocol::BootError::kBadLength) &&
-              static_cast<int>(ImageCheck::kBadLoadAddress) ==
-                  static_cast<int>(protocol::BootError::kBadLoadAddress) &&
-              static_cast<int>(ImageCheck::kBadVectors) ==
-                  static_cast<int>(protocol::BootError::kBadVectors) &&
-              static_cast<int>(ImageCheck::kImageCrc) ==
-                  static_cast<int>(protocol::BootError::kImageCrc));
+constexpr bool SameNumber(ImageCheck check, protocol::BootError error) {
+  return static_cast<int>(check) == static_cast<int>(error);
+}
+static_assert(SameNumber(ImageCheck::kNoImage, protocol::BootError::kNoImage) &&
+              SameNumber(ImageCheck::kBadHeader, protocol::BootError::kBadHeader) &&
+              SameNumber(ImageCheck::kWrongBoard, protocol::BootError::kWrongBoard) &&
+              SameNumber(ImageCheck::kWrongHardware,
+                         protocol::BootError::kWrongHardware) &&
+              SameNumber(ImageCheck::kBadLength, protocol::BootError::kBadLength) &&
+              SameNumber(ImageCheck::kBadLoadAddress,
+                         protocol::BootError::kBadLoadAddress) &&
+              SameNumber(ImageCheck::kBadVectors, protocol::BootError::kBadVectors) &&
+              SameNumber(ImageCheck::kImageCrc, protocol::BootError::kImageCrc));
 constexpr protocol::BootError ToBootError(ImageCheck c) {
   return static_cast<protocol::BootError>(static_cast<std::uint8_t>(c));
 }

@@ -11,7 +11,7 @@ namespace mjc::protocol {
 struct CanFrame {
   std::uint32_t id = 0;     // 11-bit standard identifier
   std::uint8_t length = 0;  // bytes: 0..8 classic, FD lengths up to 64
-  bool fd = false;          // a CAN FD frame (the protocol's own frames are all classic)
+  bool fd = false;          // a CAN FD frame (only TelemetryAngleBatch travels as one)
   std::array<std::uint8_t, 64> data{};
 };
 

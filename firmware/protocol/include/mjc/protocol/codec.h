@@ -19,7 +19,8 @@ enum class DecodeError : std::uint8_t {
   kOk = 0,
   kWrongFunction = 1,    // the identifier is not this message's
   kBadNode = 2,          // node id outside 1..8 (a broadcast message's: not 0)
-  kWrongLength = 3,      // DLC differs from the message's length
+  kWrongLength = 3,      // DLC differs from the message's length (or an FD message's
+                         // frame is classical)
   kFieldOutOfRange = 4,  // a field's raw value is not legal for its type
   kFdFrame = 5,          // an FD frame where a classic one is defined
 };
@@ -28,30 +29,55 @@ inline constexpr std::size_t kDecodeErrorCount =
 
 namespace codec_detail {
 
-// Compile-time layout check: every signal inside the payload, none overlapping.
+// The lengths a CAN FD frame can have above 8 bytes (DLC 9..15).
+constexpr bool IsFdLength(unsigned n) {
+  return n <= 8 || n == 12 || n == 16 || n == 20 || n == 24 || n == 32 || n == 48 ||
+         n == 64;
+}
+
+// The first payload bit of the 64-bit word a signal is packed in: the whole payload's
+// one word for a classical frame; the signal's own byte for an FD frame (the word then
+// spans up to 8 bytes from there, fewer at the frame's end).
+template <class M, class S>
+constexpr unsigned WordStart(const S& s) {
+  return Message<M>::kLength <= 8 ? 0u : (s.start / 8u) * 8u;
+}
+
+// Compile-time layout check: every signal inside the payload and inside its word, none
+// overlapping; a classical message at most 8 bytes, an FD message a legal FD length.
 template <class M>
 constexpr bool LayoutIsValid() {
-  std::uint64_t used = 0;
+  std::uint64_t used[8] = {};
   bool ok = true;
   std::apply(
       [&](const auto&... s) {
         (
             [&] {
               if (s.bits == 0 || s.bits > 64 ||
-                  s.start + s.bits > Message<M>::kLength * 8) {
+                  s.start + s.bits > Message<M>::kLength * 8u ||
+                  s.start - WordStart<M>(s) + s.bits > 64u) {
                 ok = false;
                 return;
               }
-              const std::uint64_t mask =
-                  (s.bits == 64 ? ~std::uint64_t{0} : ((std::uint64_t{1} << s.bits) - 1u))
-                  << s.start;
-              if (used & mask) ok = false;
-              used |= mask;
+              for (unsigned bit = s.start; bit < s.start + s.bits; ++bit) {
+                const std::uint64_t mask = std::uint64_t{1} << (bit % 64u);
+                if (used[bit / 64u] & mask) ok = false;
+                used[bit / 64u] |= mask;
+              }
             }(),
             ...);
       },
       Message<M>::kSignals);
-  return ok && Message<M>::kLength <= 8;
+  return ok &&
+         (Message<M>::kFd ? Message<M>::kLength > 8 && IsFdLength(Message<M>::kLength)
+                          : Message<M>::kLength <= 8);
+}
+
+// The bytes of the word a signal starting at `word_start` is packed in.
+template <class M>
+constexpr int WordBytes(unsigned word_start) {
+  const unsigned left = Message<M>::kLength - word_start / 8u;
+  return static_cast<int>(left < 8u ? left : 8u);
 }
 
 }  // namespace codec_detail
@@ -64,21 +90,36 @@ constexpr std::uint32_t IdOf(std::uint8_t node) {
 }
 
 // The frame of `message` from (board) or to (host) `node`; a broadcast message goes to
-// every node (node ignored).
+// every node (node ignored). Bytes no signal covers are zero.
 template <class M>
 constexpr CanFrame Encode(const M& message, std::uint8_t node) {
   static_assert(codec_detail::LayoutIsValid<M>(), "signals overlap or leave the frame");
   CanFrame frame;
   frame.id = IdOf<M>(node);
   frame.length = Message<M>::kLength;
-  std::uint64_t word = 0;
-  std::apply([&](const auto&... s) { (s.Pack(message, &word), ...); },
-             Message<M>::kSignals);
-  PutLe(frame.data.data(), word, Message<M>::kLength);
+  frame.fd = Message<M>::kFd;
+  if constexpr (Message<M>::kLength <= 8) {
+    std::uint64_t word = 0;
+    std::apply([&](const auto&... s) { (s.Pack(message, &word), ...); },
+               Message<M>::kSignals);
+    PutLe(frame.data.data(), word, Message<M>::kLength);
+  } else {
+    const auto pack = [&](const auto& s) {
+      const unsigned at = codec_detail::WordStart<M>(s);
+      const int bytes = codec_detail::WordBytes<M>(at);
+      std::uint8_t* p = frame.data.data() + at / 8u;
+      std::uint64_t word = GetLe(p, bytes);
+      s.Pack(message, &word, at);
+      PutLe(p, word, bytes);
+    };
+    std::apply([&](const auto&... s) { (pack(s), ...); }, Message<M>::kSignals);
+  }
   return frame;
 }
 
-// Decodes `frame` into *out when it is a valid M; *out is untouched otherwise.
+// Decodes `frame` into *out when it is a valid M; *out is untouched otherwise. A
+// classical message in an FD frame is kFdFrame; an FD message in a classical frame has
+// the wrong length (no classical frame holds more than 8 bytes).
 template <class M>
 constexpr DecodeError Decode(const CanFrame& frame, M* out) {
   static_assert(codec_detail::LayoutIsValid<M>(), "signals overlap or leave the frame");
@@ -91,13 +132,26 @@ constexpr DecodeError Decode(const CanFrame& frame, M* out) {
                              : (node < kMinNode || node > kMaxNode)) {
     return DecodeError::kBadNode;
   }
-  if (frame.fd) return DecodeError::kFdFrame;
-  if (frame.length != Message<M>::kLength) return DecodeError::kWrongLength;
-  const std::uint64_t word = GetLe(frame.data.data(), Message<M>::kLength);
+  if (frame.fd && !Message<M>::kFd) return DecodeError::kFdFrame;
+  if (frame.fd != Message<M>::kFd || frame.length != Message<M>::kLength) {
+    return DecodeError::kWrongLength;
+  }
   M decoded{};
   bool ok = true;
-  std::apply([&](const auto&... s) { ((ok = ok && s.Unpack(word, &decoded)), ...); },
-             Message<M>::kSignals);
+  if constexpr (Message<M>::kLength <= 8) {
+    const std::uint64_t word = GetLe(frame.data.data(), Message<M>::kLength);
+    std::apply([&](const auto&... s) { ((ok = ok && s.Unpack(word, &decoded)), ...); },
+               Message<M>::kSignals);
+  } else {
+    const auto unpack = [&](const auto& s) {
+      const unsigned at = codec_detail::WordStart<M>(s);
+      const std::uint64_t word =
+          GetLe(frame.data.data() + at / 8u, codec_detail::WordBytes<M>(at));
+      return s.Unpack(word, &decoded, at);
+    };
+    std::apply([&](const auto&... s) { ((ok = ok && unpack(s)), ...); },
+               Message<M>::kSignals);
+  }
   if (!ok) return DecodeError::kFieldOutOfRange;
   *out = decoded;
   return DecodeError::kOk;

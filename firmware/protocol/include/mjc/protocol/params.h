@@ -69,7 +69,7 @@ inline constexpr std::int64_t kI32Min = std::numeric_limits<std::int32_t>::min()
 // the board may report.
 #define MJC_PARAM_LIST(X)                                                                \
   X(kTelemetryAnglesHz, 0x0100, "telemetry_angles_hz", "Hz", 0, 0, kBoardTickHz, kNode,  \
-    "rate of TelemetryAngles (0: off)")                                                  \
+    "rate of the angle samples (one a TelemetryAngles; CAN FD: five a batch; 0: off)")   \
   X(kTelemetryTorqueHz, 0x0101, "telemetry_torque_hz", "Hz", 0, 0, kBoardTickHz, kNode,  \
     "rate of TelemetryTorque (0: off)")                                                  \
   X(kTelemetryPowerHz, 0x0102, "telemetry_power_hz", "Hz", 0, 0, kBoardTickHz, kNode,    \

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -160,6 +161,14 @@ class Peripheral {
  protected:
   bool clock_on_ = true;
 };
+
+// A register value or address as the manual writes it, for the violation reports
+// ("0x08004000").
+inline std::string Hex(std::uint32_t v) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%08X", v);
+  return b;
+}
 
 // Even parity helper used by the AS5047P frames.
 constexpr bool OddBitCount(std::uint32_t v) {

@@ -21,6 +21,7 @@
 #include <functional>
 
 #include "mjc/g474model/common.h"
+#include "mjc/g474model/register_table.h"
 
 namespace mjc::g474model {
 
@@ -66,6 +67,8 @@ class Cortex final : public Peripheral {
   void SetResetRequestHook(std::function<void()> hook) { reset_hook_ = std::move(hook); }
 
  private:
+  // The registers without code of their own (register_table.h).
+  static RegisterTable<Cortex> Registers();
   std::uint32_t Cyccnt() const;
 
   ViolationLog* log_;

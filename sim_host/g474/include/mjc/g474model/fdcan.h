@@ -49,6 +49,7 @@
 
 #include "mjc/g474model/common.h"
 #include "mjc/g474model/rcc.h"
+#include "mjc/g474model/register_table.h"
 
 namespace mjc::g474model {
 
@@ -117,6 +118,8 @@ class Fdcan final : public Peripheral {
   bool active() const;
 
  private:
+  // The registers without code of their own (register_table.h).
+  static RegisterTable<Fdcan> Registers();
   bool Protected(const char* reg);
   std::uint32_t Word(std::uint32_t byte_offset) const { return ram_[byte_offset / 4]; }
   void SetIr(std::uint32_t bits) { ir_ |= bits; }

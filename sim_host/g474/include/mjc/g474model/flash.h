@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "mjc/g474model/common.h"
+#include "mjc/g474model/register_table.h"
 
 namespace mjc::g474model {
 
@@ -131,6 +132,10 @@ class Flash final : public Peripheral {
   std::vector<std::uint8_t>& mutable_contents() { return memory_; }
 
  private:
+  // The registers without code of their own (register_table.h).
+  static RegisterTable<Flash> Registers();
+  // WRP1AR, WRP1BR, WRP2AR, WRP2BR at `offset`, or null.
+  const std::uint32_t* Wrp(std::uint32_t offset) const;
   enum class OpKind { kNone, kErase, kProgram };
   struct Operation {
     OpKind kind = OpKind::kNone;

@@ -27,6 +27,7 @@
 #include <optional>
 
 #include "mjc/g474model/common.h"
+#include "mjc/g474model/register_table.h"
 
 namespace mjc::g474model {
 
@@ -125,6 +126,8 @@ class GpioPort final : public Peripheral {
   void Refresh(std::uint32_t pins = 0xFFFFu);
 
  private:
+  // The registers without code of their own (register_table.h).
+  static RegisterTable<GpioPort> Registers();
   int port_;
   ViolationLog* log_;
   std::uint32_t moder_ = 0, otyper_ = 0, ospeedr_ = 0, pupdr_ = 0, odr_ = 0, lckr_ = 0,

@@ -16,6 +16,7 @@
 
 #include "mjc/g474model/common.h"
 #include "mjc/g474model/rcc.h"
+#include "mjc/g474model/register_table.h"
 
 namespace mjc::g474model {
 
@@ -37,6 +38,8 @@ class Iwdg final : public Peripheral {
   std::uint32_t counter() const { return counter_; }
 
  private:
+  // The registers without code of their own (register_table.h).
+  static RegisterTable<Iwdg> Registers();
   std::uint32_t Divider() const;
   void Expire(const char* why);
 

@@ -24,6 +24,7 @@
 #include <functional>
 
 #include "mjc/g474model/common.h"
+#include "mjc/g474model/register_table.h"
 
 namespace mjc::g474model {
 
@@ -144,6 +145,8 @@ class Rcc final : public Peripheral {
   double tim_pclk2_hz_now() const;
   double pllq_hz_now() const;
   double fdcan_kernel_hz_now() const;
+  // The registers without code of their own (register_table.h).
+  static RegisterTable<Rcc> Registers();
   bool WriteRegister(const Access& a);
   void Start(Osc o, Picoseconds delay);
   void Stop(Osc o);
@@ -192,6 +195,10 @@ class Pwr final : public Peripheral {
   void SetChangeHook(std::function<void()> hook) { change_hook_ = std::move(hook); }
 
  private:
+  static RegisterTable<Pwr> Registers();
+  // PUCRx/PDCRx at `offset`, or null.
+  std::uint32_t* PullRegister(std::uint32_t offset);
+
   ViolationLog* log_;
   Picoseconds now_ = 0;
   Picoseconds vosf_until_ = 0;

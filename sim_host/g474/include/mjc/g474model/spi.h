@@ -22,6 +22,7 @@
 
 #include "mjc/g474model/common.h"
 #include "mjc/g474model/rcc.h"
+#include "mjc/g474model/register_table.h"
 
 namespace mjc::g474model {
 
@@ -58,6 +59,8 @@ class Spi final : public Peripheral {
   double sck_hz() const;
 
  private:
+  // The registers without code of their own (register_table.h).
+  static RegisterTable<Spi> Registers();
   std::uint32_t Sr() const;
   void StartNext();
   unsigned FrameBytes() const { return frame_bits() > 8 ? 2u : 1u; }

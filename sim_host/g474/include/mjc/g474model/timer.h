@@ -35,6 +35,7 @@
 #include "mjc/g474model/common.h"
 #include "mjc/g474model/gpio.h"
 #include "mjc/g474model/rcc.h"
+#include "mjc/g474model/register_table.h"
 
 namespace mjc::g474model {
 
@@ -79,6 +80,11 @@ class Timer final : public Peripheral {
   double UpdatePeriodSeconds() const;
 
  private:
+  // The registers without code of their own (register_table.h); TIM1's extra ones.
+  static RegisterTable<Timer> Registers();
+  static RegisterTable<Timer> AdvancedRegisters();
+  // CCR1..4 (and TIM1's CCR5/6) at `offset`, or null.
+  std::uint32_t* Ccr(std::uint32_t offset);
   unsigned Sms() const { return (smcr_ & 7u) | ((smcr_ >> 13) & 8u); }
   bool EncoderMode() const;
   unsigned Cms() const { return (cr1_ >> 5) & 3u; }

@@ -180,6 +180,9 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   void Bring(const Route& route);
   void Settle(const Route& route);
   bool OutputOnly(const Route& route) const;  // a GPIO port's ODR, BSRR or BRR
+  // The block behind an RCC enable/reset bit (null for the flash interface, which has
+  // no reset bit).
+  Peripheral* GatedBlock(Gate g);
   void UpdateGates();
   // Takes what the NVIC would take now; `sample`: the peripherals' lines are read
   // again even when no access since the last reading could have moved one.
