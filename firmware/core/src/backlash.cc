@@ -1,12 +1,6 @@
 #include "mjc/core/backlash.h"
 
 namespace mjc {
-namespace {
-
-Angle Scaled(Scale alpha, Angle a) { return Mul<Angle>(alpha, a); }
-
-}  // namespace
-
 BacklashConfigError Validate(const BacklashConfig& config) {
   if (config.alpha <= kMinBacklashAlpha || config.alpha >= kMaxBacklashAlpha) {
     return BacklashConfigError::kAlphaOutOfRange;
@@ -17,14 +11,6 @@ BacklashConfigError Validate(const BacklashConfig& config) {
   }
   if (config.c_left > config.c_right) return BacklashConfigError::kLeftAboveRight;
   return BacklashConfigError::kOk;
-}
-
-Angle BacklashModel::LowerEdge(Angle motor) const {
-  return Scaled(config_->alpha, motor - config_->c_right);
-}
-
-Angle BacklashModel::UpperEdge(Angle motor) const {
-  return Scaled(config_->alpha, motor - config_->c_left);
 }
 
 Angle BacklashModel::Reset(Angle motor, Angle joint) {

@@ -16,11 +16,12 @@ SupervisorConfigError Validate(const SupervisorConfig& c) {
   return E::kOk;
 }
 
-Fault Supervisor::Evaluate(const SupervisorInput& in, bool with_history) const {
+template <bool kWithHistory>
+Fault Supervisor::Evaluate(const SupervisorInput& in) const {
   const SupervisorConfig& c = *config_;
   if (in.joint_status == JointFrameStatus::kParityError) return Fault::kJointParity;
   if (in.joint_status == JointFrameStatus::kErrorFlag) return Fault::kJointErrorFlag;
-  if (with_history && state_->have_history) {
+  if (kWithHistory && state_->have_history) {
     if (Abs(in.joint - state_->last_joint) > c.joint_jump_max) return Fault::kJointJump;
     if (in.joint_count == state_->last_joint_count &&
         Abs(in.motor - state_->motor_at_joint_change) > c.stuck_motor_travel) {
@@ -50,15 +51,16 @@ void Supervisor::Remember(const SupervisorInput& in) {
 Fault Supervisor::Check(std::uint32_t tick, const SupervisorInput& in) {
   if (state_->latched != Fault::kNone) return state_->latched;
   // The frozen-motor counter includes this tick before it is judged. A motor held at
-  // its setpoint is not driven to move, whatever duty the hold takes.
-  const bool driven = Abs(in.applied_duty) >= config_->stuck_duty &&
-                      Abs(in.motor_error) > config_->stuck_hold_error;
-  if (state_->have_history && driven && in.motor_count == state_->last_motor_count) {
+  // its setpoint is not driven to move, whatever duty the hold takes. The count is
+  // tested first: while the motor turns it differs, and duty and error go unread.
+  const bool frozen = state_->have_history && in.motor_count == state_->last_motor_count;
+  if (frozen && Abs(in.applied_duty) >= config_->stuck_duty &&
+      Abs(in.motor_error) > config_->stuck_hold_error) {
     ++state_->motor_frozen_ticks;
   } else {
     state_->motor_frozen_ticks = 0;
   }
-  const Fault f = Evaluate(in, true);
+  const Fault f = Evaluate<true>(in);
   if (f != Fault::kNone) {
     state_->latched = f;
     state_->fault_tick = tick;
@@ -69,7 +71,7 @@ Fault Supervisor::Check(std::uint32_t tick, const SupervisorInput& in) {
 }
 
 bool Supervisor::Clear(const SupervisorInput& in) {
-  if (Evaluate(in, false) != Fault::kNone) return false;
+  if (Evaluate<false>(in) != Fault::kNone) return false;
   state_->Clear();
   Remember(in);
   return true;

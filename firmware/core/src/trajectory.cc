@@ -289,8 +289,7 @@ TrajectoryPoint TrajectoryGenerator::StepOscillation() {
   }
   if (stage_ == Stage::kCycling) {
     const std::uint32_t phase = (quadrant_ << 30) | phase_offset_;
-    const Coefficient sine = Sin(phase);
-    const Coefficient cosine = Cos(phase);
+    const auto [sine, cosine] = SinCos(phase);
     const TrajectoryPoint point{
         neutral_ + Mul<Angle>(Angle::FromRaw(amplitude_.value()), sine),
         ramping_ ? Mul<AngularVelocity>(AngularVelocity::FromRaw(peak_velocity_.value()),

@@ -136,6 +136,25 @@ MJC_VECTOR_TEST(TrigSin, SymmetriesAreExact) {
   VT_EXPECT_EQ(broken, 0);
 }
 
+// SinCos (the trajectory's per-tick pair) is Sin and Cos bit for bit: around every
+// quadrant boundary, where it switches which quarter-wave value is which, and at random.
+MJC_VECTOR_TEST(TrigSinCos, EqualsSinAndCosBitForBit) {
+  Rng rng(106);
+  int broken = 0;
+  const auto check = [&broken](std::uint32_t p) {
+    const mjc::SineCosine sc = mjc::SinCos(p);
+    if (sc.sine.raw() != mjc::Sin(p).raw()) ++broken;
+    if (sc.cosine.raw() != mjc::Cos(p).raw()) ++broken;
+  };
+  for (std::uint32_t q = 0; q < 4; ++q) {
+    for (std::int32_t d = -3; d <= 3; ++d) {
+      check(static_cast<std::uint32_t>(q * kQuarter + static_cast<std::uint32_t>(d)));
+    }
+  }
+  for (int i = 0; i < 20000; ++i) check(static_cast<std::uint32_t>(rng.Next() >> 32));
+  VT_EXPECT_EQ(broken, 0);
+}
+
 // sin² + cos² = 1 within the two roundings: |Δ| <= 2·(1 LSB)·1 + (1 LSB)² ≈ 2 LSB.
 MJC_VECTOR_TEST(TrigSin, PythagoreanIdentity) {
   Rng rng(105);

@@ -46,23 +46,20 @@ using WideRep =
 
 template <class Rep>
 constexpr Rep SaturateTo(std::int64_t v) {
-  if (v > static_cast<std::int64_t>(std::numeric_limits<Rep>::max())) {
-    return std::numeric_limits<Rep>::max();
-  }
-  if (v < static_cast<std::int64_t>(std::numeric_limits<Rep>::min())) {
-    return std::numeric_limits<Rep>::min();
-  }
-  return static_cast<Rep>(v);
+  // One test for the common case, a value that fits (on Cortex-M4 a compare of the high
+  // word with the low word's sign, not two 64-bit compares).
+  const auto narrow = static_cast<Rep>(v);
+  if (narrow == v) return narrow;
+  return v < 0 ? std::numeric_limits<Rep>::min() : std::numeric_limits<Rep>::max();
 }
 
 // floor(v / 2^s + 1/2) without overflow, for 0 < s < 64.
 constexpr std::int64_t RoundingShiftRight(std::int64_t v, int s) {
-  const std::int64_t quotient = v >> s;  // floor; arithmetic shift is defined in C++20
-  const std::uint64_t remainder =
-      static_cast<std::uint64_t>(v) & ((std::uint64_t{1} << s) - 1u);
-  const std::uint64_t half = std::uint64_t{1} << (s - 1);
-  // quotient <= INT64_MAX >> s, so the increment cannot overflow.
-  return remainder >= half ? quotient + 1 : quotient;
+  // floor(v / 2^s) (arithmetic shift is defined in C++20), plus one when the remainder
+  // v mod 2^s is at least half, i.e. exactly when bit s−1 of v is set. quotient <=
+  // INT64_MAX >> s, so the increment cannot overflow.
+  const std::int64_t quotient = v >> s;
+  return quotient + ((v >> (s - 1)) & 1);
 }
 
 // v · 2^s, saturated to int64, for 0 <= s < 63.
@@ -79,6 +76,21 @@ constexpr std::int64_t SaturatingShiftLeft(std::int64_t v, int s) {
 
 // Not constexpr: reaching it during constant evaluation is a compile error, which is
 // how a consteval literal reports a value outside its format (no exceptions on target).
+// a·b, exact in int64. On Cortex-M4 this is one SMULL, written out because GCC, when an
+// operand comes out of a saturating add's branches, widens it to 64 bits first and then
+// multiplies 64×64 (three multiplies and an add); the products are the same.
+constexpr std::int64_t WideProduct(std::int32_t a, std::int32_t b) {
+#if defined(__arm__) && defined(__ARM_FEATURE_DSP)
+  if (!std::is_constant_evaluated()) {
+    std::uint32_t lo = 0;
+    std::int32_t hi = 0;
+    asm("smull %0, %1, %2, %3" : "=&r"(lo), "=&r"(hi) : "r"(a), "r"(b));
+    return static_cast<std::int64_t>((static_cast<std::uint64_t>(hi) << 32) | lo);
+  }
+#endif
+  return std::int64_t{a} * b;
+}
+
 void LiteralOutOfRange();
 
 constexpr double Pow2(int e) {
@@ -154,7 +166,8 @@ class Fixed {
 
   // Saturating: -Min() is Max().
   constexpr Fixed operator-() const {
-    return FromRaw(fixed_detail::SaturateTo<Rep>(-static_cast<std::int64_t>(raw_)));
+    return raw_ == std::numeric_limits<Rep>::min() ? Max()
+                                                   : FromRaw(static_cast<Rep>(-raw_));
   }
   constexpr Fixed operator+() const { return *this; }
 
@@ -246,8 +259,12 @@ constexpr auto operator*(Fixed<U1, F1, R1> a, Fixed<U2, F2, R2> b) {
                 "multiply 32-bit (or narrower) operands; FixedCast a 64-bit value first");
   using W = fixed_detail::WideRep<R1, R2>;
   using Result = Fixed<UnitProduct<U1, U2>, F1 + F2, W>;
-  return Result::FromRaw(
-      static_cast<W>(static_cast<W>(a.raw()) * static_cast<W>(b.raw())));
+  if constexpr (std::is_same_v<W, std::int64_t>) {
+    return Result::FromRaw(fixed_detail::WideProduct(a.raw(), b.raw()));
+  } else {
+    return Result::FromRaw(
+        static_cast<W>(static_cast<W>(a.raw()) * static_cast<W>(b.raw())));
+  }
 }
 
 // a · b rounded to nearest and saturated into To, whose unit must be the product's.
@@ -290,9 +307,10 @@ constexpr To Divide(Fixed<U1, F1, R1> a, Fixed<U2, F2, R2> b) {
 // the velocity estimator's 1/(D·dt). Legal shift: 32..62.
 constexpr std::int64_t MulShiftRound(std::int64_t a, std::int32_t m, int shift) {
   // a = hi·2^32 + lo with hi signed and 0 <= lo < 2^32.
-  const std::int64_t hi = a >> 32;
+  // hi held in 32 bits: a 32×32 multiply (SMULL), not a 64×64 one.
+  const auto hi = static_cast<std::int32_t>(a >> 32);
   const auto lo = static_cast<std::uint32_t>(static_cast<std::uint64_t>(a) & 0xFFFFFFFFu);
-  const std::int64_t hi_product = hi * m;                             // |hi·m| < 2^62
+  const std::int64_t hi_product = fixed_detail::WideProduct(hi, m);   // |hi·m| < 2^62
   const std::int64_t lo_product = static_cast<std::int64_t>(lo) * m;  // |lo·m| < 2^63
   // a·m = hi_product·2^32 + lo_product = upper·2^32 + lower, 0 <= lower < 2^32.
   const std::int64_t upper = hi_product + (lo_product >> 32);
@@ -304,8 +322,18 @@ constexpr std::int64_t MulShiftRound(std::int64_t a, std::int32_t m, int shift) 
   // shift > 32: the rounding half 2^(shift-1) lies wholly in `upper`, and `lower` is
   // below one unit of the result, so floor((upper·2^32 + lower + half) / 2^shift) =
   // floor((upper + 2^(shift-33)) / 2^(shift-32)).
+  // s = shift − 32 is 1..30: the half fits 32 bits and the shift moves each 32-bit word
+  // once (a 64-bit shift by a register would also provide for shifts of 32 or more).
   const int s = shift - 32;
-  return (upper + (std::int64_t{1} << (s - 1))) >> s;  // |upper| < 2^62.1: no overflow
+  const std::int64_t half = std::uint32_t{1} << (s - 1);
+  const std::int64_t rounded = upper + half;  // |upper| < 2^62.1: no overflow
+  const auto rounded_hi = static_cast<std::int32_t>(rounded >> 32);
+  const auto rounded_lo = static_cast<std::uint32_t>(static_cast<std::uint64_t>(rounded));
+  const std::uint32_t result_lo =
+      (rounded_lo >> s) | (static_cast<std::uint32_t>(rounded_hi) << (32 - s));
+  const std::int64_t result_hi = rounded_hi >> s;
+  return static_cast<std::int64_t>((static_cast<std::uint64_t>(result_hi) << 32) |
+                                   result_lo);
 }
 
 // |x|, saturating (Abs(Min()) is Max()).

@@ -136,7 +136,10 @@ class Supervisor {
   bool Clear(const SupervisorInput& in);
 
  private:
-  Fault Evaluate(const SupervisorInput& in, bool with_history) const;
+  // A template so that each caller (Check with history, Clear without) gets its own
+  // copy inlined: a call with the flag cost the tick 15 Cortex-M4 instructions more.
+  template <bool kWithHistory>
+  Fault Evaluate(const SupervisorInput& in) const;
   void Remember(const SupervisorInput& in);
 
   const SupervisorConfig* config_;

@@ -102,4 +102,27 @@ constexpr Coefficient Cos(std::uint32_t phase) {
   return Sin(static_cast<std::uint32_t>(phase + trig_detail::kQuarterTurn));
 }
 
+struct SineCosine {
+  Coefficient sine, cosine;
+};
+
+// Sin(phase) and Cos(phase), bit for bit, from the two quarter-wave values of the
+// phase's offset in its quadrant (x and 2^30 − x): the quadrant only picks which is
+// which and their signs, so it is decoded once instead of once per function.
+constexpr SineCosine SinCos(std::uint32_t phase) {
+  using trig_detail::kQuarterTurn;
+  const std::uint32_t offset = phase & (kQuarterTurn - 1u);
+  const auto rising = static_cast<std::int32_t>(trig_detail::QuarterSine(offset));
+  const auto falling =
+      static_cast<std::int32_t>(trig_detail::QuarterSine(kQuarterTurn - offset));
+  const std::uint32_t quadrant = phase >> 30;
+  // Quadrants 0 and 2 rise in |sin| (Sin reads x = offset), 1 and 3 fall; the cosine
+  // is the sine a quadrant on. Sin is negative in quadrants 2 and 3, Cos in 1 and 2.
+  const bool odd = (quadrant & 1u) != 0;
+  const std::int32_t sine = odd ? falling : rising;
+  const std::int32_t cosine = odd ? rising : falling;
+  return {Coefficient::FromRaw(quadrant >= 2 ? -sine : sine),
+          Coefficient::FromRaw(quadrant == 1 || quadrant == 2 ? -cosine : cosine)};
+}
+
 }  // namespace mjc
