@@ -416,7 +416,8 @@ IdentifiedAttachment IdentifyAttachment(const SubjectSweep& sweep,
 plant::InterfaceParams ModelInterface(const IdentifiedAttachment& identified,
                                       const plant::PlantParams& robot) {
   if (identified.stiffness.n == 0) {
-    throw std::invalid_argument("no attachment fit to build a model from");
+    throw std::invalid_argument(
+        "no attachment fit to build a model from: no valid fit at the amplitudes used");
   }
   plant::InterfaceParams i;
   i.present = true;
