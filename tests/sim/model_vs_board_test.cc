@@ -87,6 +87,45 @@ TEST(SimModel, PredictionFromTheIdentifiedAttachmentAgreesWithTheBoard) {
   EXPECT_GT(crossed.nrmse_net, 5.0);
 }
 
+TEST(SimModel, ModelIsTheMeanFitAtElevenDegreesAndAboveLessTheBearings) {
+  // Setup: fits at 6° (left out: too few encoder counts for θ̇_j), two at 11° and 25°,
+  // one at 25° the board could not solve (left out).
+  const auto window = [](bool valid, double k, double b, double offset) {
+    WindowOutcome w;
+    w.fit_valid = valid;
+    w.stiffness = k;
+    w.damping = b;
+    w.offset = offset;
+    return w;
+  };
+  SubjectSweep sweep;
+  sweep.points.resize(3);
+  sweep.points[0].amplitude_deg = 6;
+  sweep.points[0].flexions = {window(true, 9.0, 0.9, 0.9)};
+  sweep.points[1].amplitude_deg = 11;
+  sweep.points[1].flexions = {window(true, 4.0, 0.20, 0.010)};
+  sweep.points[2].amplitude_deg = 25;
+  sweep.points[2].flexions = {window(true, 5.0, 0.30, 0.020),
+                              window(false, 7.0, 0.7, 0.7)};
+  plant::PlantParams robot = rig::PaperRobot();
+  robot.joint.viscous_Nm_s_per_rad = 0.004;
+
+  // Exercise.
+  const IdentifiedAttachment identified = IdentifyAttachment(sweep);
+  const plant::InterfaceParams model = ModelInterface(identified, robot);
+
+  // Verify: the means of the two fits that count; b less the robot's own bearings.
+  EXPECT_EQ(identified.stiffness.n, 2u);
+  EXPECT_TRUE(model.present);
+  EXPECT_EQ(model.model, plant::InterfaceModel::kKelvinVoigt);
+  EXPECT_NEAR(model.stiffness_Nm_per_rad, 4.5, 1e-12);
+  EXPECT_NEAR(model.damping_Nm_s_per_rad, 0.25 - 0.004, 1e-12);
+  EXPECT_NEAR(model.preload_Nm, 0.015, 1e-12);
+  // No fit at all: no model.
+  sweep.points.erase(sweep.points.begin() + 1, sweep.points.end());
+  EXPECT_THROW(ModelInterface(IdentifyAttachment(sweep), robot), std::invalid_argument);
+}
+
 TEST(SimModel, ComparisonRefusesSweepsOfOtherAmplitudes) {
   SubjectSweep a, b;
   a.points.resize(2);
