@@ -105,8 +105,8 @@ inline double TanhByExp(double y) {
 // log(x) and sin, cos of x for the sensor noise's Box–Muller pairs, within 1 ulp of
 // glibc's log, sin and cos of the same argument (measured on 10^8 pairs of the draws
 // StandardNormal makes; exact at 1, ½, √½ and the smallest draw 2^-53), inline and at
-// a third of glibc's instructions (its sincos alone took 130 a pair, 4 % of
-// mjc-paper's time). A one-ulp difference moves a noise sample by ~1e-16 counts, and
+// about half of glibc's instructions (its sincos alone took 130 a pair, 4 % of
+// sim_fidelity's time). A one-ulp difference moves a noise sample by ~1e-16 counts, and
 // the count it rounds into changes only if the sample lands that close to a half
 // count: the sensor words are StandardNormal's, bar a chance of ~1e-9 over a run.
 // The polynomials are the minimax kernels of fdlibm (e_log.c, k_sin.c, k_cos.c;
