@@ -2,7 +2,6 @@
 #include "mjc/plant/plant.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -100,87 +99,6 @@ inline double TanhByExp(double y) {
   if (std::abs(y) > 19.1) return std::copysign(1.0, y);
   const double e = std::exp(-2.0 * std::abs(y));
   return std::copysign((1.0 - e) / (1.0 + e), y);
-}
-
-// log(x) and sin, cos of x for the sensor noise's Box–Muller pairs, within 1 ulp of
-// glibc's log, sin and cos of the same argument (measured on 10^8 pairs of the draws
-// StandardNormal makes; exact at 1, ½, √½ and the smallest draw 2^-53), inline and at
-// about half of glibc's instructions (its sincos alone took 130 a pair, 4 % of
-// sim_fidelity's time). A one-ulp difference moves a noise sample by ~1e-16 counts, and
-// the count it rounds into changes only if the sample lands that close to a half
-// count: the sensor words are StandardNormal's, bar a chance of ~1e-9 over a run.
-// The polynomials are the minimax kernels of fdlibm (e_log.c, k_sin.c, k_cos.c;
-// Copyright (C) 1993 by Sun Microsystems, Inc. Permission to use, copy, modify, and
-// distribute this software is freely granted, provided that this notice is preserved).
-
-// log(x) for a normal x > 0 (the draws are in [2^-53, 1]).
-inline double LogOfPositive(double x) {
-  const auto bits = std::bit_cast<std::uint64_t>(x);
-  // x = 2^k·m with m in [√½, √2), f = m − 1. Without branches: whether the mantissa
-  // is at or above √2's (then m is halved) is a coin toss for uniform draws.
-  const std::uint64_t mantissa = bits & 0x000F'FFFF'FFFF'FFFFu;
-  const std::uint64_t halve =
-      (mantissa + (0x0010'0000'0000'0000u - 0x6'A09E'667F'3BCDu)) >> 52;
-  const int k = static_cast<int>(bits >> 52) - 1023 + static_cast<int>(halve);
-  const double f =
-      std::bit_cast<double>(mantissa | (0x3FF0'0000'0000'0000u - (halve << 52))) - 1.0;
-  // log(1 + f) = f − f²/2 + s·(f²/2 + R(s²)), s = f/(2 + f).
-  const double s = f / (2.0 + f);
-  const double z = s * s;
-  const double w = z * z;
-  const double even = w * (3.999999999940941908e-01 +
-                           w * (2.222219843214978396e-01 + w * 1.531383769920937332e-01));
-  const double odd =
-      z * (6.666666666666735130e-01 +
-           w * (2.857142874366239149e-01 +
-                w * (1.818357216161805012e-01 + w * 1.479819860511658591e-01)));
-  const double half_f2 = 0.5 * f * f;
-  constexpr double kLn2High = 6.93147180369123816490e-01;  // 32 bits: k·kLn2High exact
-  constexpr double kLn2Low = 1.90821492927058770002e-10;
-  const double dk = static_cast<double>(k);
-  return dk * kLn2High - ((half_f2 - (s * (half_f2 + odd + even) + dk * kLn2Low)) - f);
-}
-
-// sin x and cos x for x in [0, 2π].
-inline void SinCos(double x, double* sin_x, double* cos_x) {
-  // x = q·π/2 + r, |r| ≤ π/4, with π/2 in two parts (the first of 33 bits, so q times
-  // it is exact).
-  constexpr double kTwoOverPi = 6.36619772367581382433e-01;
-  constexpr double kHalfPiHigh = 1.57079632673412561417e+00;
-  constexpr double kHalfPiLow = 6.07710050650619224932e-11;
-  // Rounded to the nearest integer by adding and removing 1.5·2^52 (nearbyint is a
-  // libm call without SSE4.1).
-  constexpr double kRound = 6755399441055744.0;
-  const double q = (x * kTwoOverPi + kRound) - kRound;
-  const double r = (x - q * kHalfPiHigh) - q * kHalfPiLow;
-  const double z = r * r;
-  const double sin_r = r + r * z *
-                               (-1.66666666666666324348e-01 +
-                                z * (8.33333333332248946124e-03 +
-                                     z * (-1.98412698298579493134e-04 +
-                                          z * (2.75573137070700676789e-06 +
-                                               z * (-2.50507602534068634195e-08 +
-                                                    z * 1.58969099521155010221e-10)))));
-  const double half_z = 0.5 * z;
-  const double one_minus = 1.0 - half_z;
-  const double tail = z * z *
-                      (4.16666666666666019037e-02 +
-                       z * (-1.38888888888741095749e-03 +
-                            z * (2.48015872894767294178e-05 +
-                                 z * (-2.75573143513906633035e-07 +
-                                      z * (2.08757232129817482790e-09 +
-                                           z * -1.13596475577881948265e-11)))));
-  const double cos_r = one_minus + (((1.0 - one_minus) - half_z) + tail);
-  // The quadrant, without branches (it is random): an odd one swaps sine and cosine,
-  // the sine is negative in 2 and 3, the cosine in 1 and 2.
-  const auto quadrant = static_cast<std::uint64_t>(static_cast<int>(q));
-  const std::uint64_t swap = 0 - (quadrant & 1);
-  const auto sin_bits = std::bit_cast<std::uint64_t>(sin_r);
-  const auto cos_bits = std::bit_cast<std::uint64_t>(cos_r);
-  *sin_x = std::bit_cast<double>(((sin_bits & ~swap) | (cos_bits & swap)) ^
-                                 (((quadrant >> 1) & 1) << 63));
-  *cos_x = std::bit_cast<double>(((cos_bits & ~swap) | (sin_bits & swap)) ^
-                                 ((((quadrant + 1) >> 1) & 1) << 63));
 }
 
 void CheckStep(double dt_s) {
@@ -739,20 +657,17 @@ void Plant::RefreshTruth() const {
 }
 
 void Plant::RefillNoise() {
-  // StandardNormal's pairs, (r·cos, r·sin) of the same two draws, in its order. The
-  // pairs are independent, so a block of them is computed at the machine's throughput
-  // rather than one log, one square root and one sine and cosine in a row each second
-  // sensor read: 25 ns a tick before, 15 after (the generator's words included; perf
-  // on sim_fidelity).
+  // StandardNormal's pairs, (r·cos, r·sin) of the same two draws, in its order and
+  // with the same library calls, so the values are its own bit for bit. The pairs are
+  // independent, so a block of them is computed at the machine's throughput rather than
+  // one log, one square root and one sine and cosine in a row each second sensor read.
   constexpr double kScale = 1.0 / 9007199254740992.0;  // 2^-53
   for (int n = 0; n < kNoiseBlock; n += 2) {
     const double u1 = (static_cast<double>(rng_() >> 11) + 1.0) * kScale;
     const double u2 = static_cast<double>(rng_() >> 11) * kScale;
-    const double r = std::sqrt(-2.0 * LogOfPositive(u1));
-    double sin_x = 0, cos_x = 0;
-    SinCos(kTwoPi * u2, &sin_x, &cos_x);
-    noise_[n] = r * cos_x;
-    noise_[n + 1] = r * sin_x;
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    noise_[n] = r * std::cos(kTwoPi * u2);
+    noise_[n + 1] = r * std::sin(kTwoPi * u2);
   }
   noise_next_ = 0;
 }
