@@ -351,6 +351,18 @@ inline std::unique_ptr<host::EmergencyStopThread> StartEstop(const EstopOptions&
                                                      config, raise);
 }
 
+// What a command that moves a board sets up once its client is open: a bus-off said at
+// once, its waits ended by SIGINT, SIGTERM or SIGHUP (StopOnSignals), and the
+// emergency-stop watch on options.line (StartEstop), whose StopAll ends them too.
+// Returns the watch (nullptr without a line); StopFlag() tells whether they ended.
+inline std::unique_ptr<host::EmergencyStopThread> GuardMotion(
+    host::BoardClient& board, const std::string& command, const std::string& iface,
+    const EstopOptions& options) {
+  SayBusOff(board, command, iface);
+  board.SetInterrupt(&StopOnSignals());
+  return StartEstop(options, iface, command, board.session(), &StopFlag());
+}
+
 // "emergency stop on gpiochip0:estop: every board was told to stop", or the watch's
 // failure.
 inline std::string EstopWhat(const host::EmergencyStopThread& estop) {

@@ -180,12 +180,10 @@ void AddTrial(CLI::App& app) {
       // --pause prompt waits with the board at rest, where their absence is harmless.
       host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
                               host::HostHeartbeats::kSend);
-      SayBusOff(board, "mjc trial", iface);
       // Ctrl-C (or SIGTERM, SIGHUP) ends the waits: the motion is stopped and every
       // window that arrived is kept. So does the emergency stop (after its StopAll).
-      const std::atomic<bool>& interrupted = StopOnSignals();
-      board.SetInterrupt(&interrupted);
-      estop = StartEstop(estop_options, iface, "mjc trial", board.session(), &StopFlag());
+      estop = GuardMotion(board, "mjc trial", iface, estop_options);
+      const std::atomic<bool>& interrupted = StopFlag();
       // Each window start an edge, set the moment its frame is handled.
       if (sync) {
         board.OnWindowStart([&](const protocol::WindowStart& w) {
