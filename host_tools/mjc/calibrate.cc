@@ -81,9 +81,7 @@ void AddCalibrate(CLI::App& app) {
   cmd->add_option("--amplitude-deg", amplitude_deg, "Final sweep amplitude")
       ->check(InRange(1.0, 90.0, "°"))
       ->capture_default_str();
-  cmd->add_option("--frequency-hz", frequency_hz, "Sweep frequency")
-      ->check(InRange(kMinFrequencyHz, kMaxFrequencyHz, "Hz"))
-      ->capture_default_str();
+  AddFrequencyOption(cmd, &frequency_hz, "Sweep frequency");
   cmd->add_option("--cycles", cycles, "Sweep cycles")
       ->check(InRange(2, 255))
       ->capture_default_str();

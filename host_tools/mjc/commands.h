@@ -140,6 +140,15 @@ CLI::Option* AddNodeOption(CLI::App* cmd, T* node, const char* help = "Node id")
       ->capture_default_str();
 }
 
+// --frequency-hz of a trial or sweep, within what the board accepts (kMinFrequencyHz,
+// kMaxFrequencyHz).
+inline CLI::Option* AddFrequencyOption(CLI::App* cmd, double* frequency_hz,
+                                       const char* help) {
+  return cmd->add_option("--frequency-hz", *frequency_hz, help)
+      ->check(InRange(kMinFrequencyHz, kMaxFrequencyHz, "Hz"))
+      ->capture_default_str();
+}
+
 // --out and --force of a command that writes a run's folder (see host::OutputFolder).
 struct OutputOptions {
   std::string out;

@@ -80,9 +80,7 @@ void AddTrial(CLI::App& app) {
   cmd->add_option("--amplitudes", amplitudes, "Amplitude protocol: amplitudes (deg)")
       ->check(InRange(1.0, 90.0, "°"))
       ->capture_default_str();
-  cmd->add_option("--frequency-hz", frequency_hz, "Sine frequency")
-      ->check(InRange(kMinFrequencyHz, kMaxFrequencyHz, "Hz"))
-      ->capture_default_str();
+  AddFrequencyOption(cmd, &frequency_hz, "Sine frequency");
   cmd->add_option("--rest-s", rest_s, "Rest before and after each trial")
       ->check(InRange(0.0, 25.0, "s"))
       ->capture_default_str();
