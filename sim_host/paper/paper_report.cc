@@ -524,7 +524,11 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
         const std::vector<plant::PlantParams>& subjects, const ControlConfig& config,
         std::uint64_t seed, int threads, double frequency_hz, Report& report) {
   const auto start = std::chrono::steady_clock::now();
-  sim::SimBoard board(robot, config);
+  // The board on a bus of its own, calibrated by the host library as `mjc calibrate`
+  // calibrates one; the trials then run over buses of their own as `mjc trial` runs
+  // them (sim/scenarios.h says which figures come over the bus and which from the
+  // board's side).
+  sim::BusBoard board(robot, config);
   if (board.app().control().config().velocity_window != config.velocity_window) {
     throw std::runtime_error("the board refused the configuration (velocity window " +
                              std::to_string(config.velocity_window) + ")");

@@ -1,7 +1,8 @@
 // A trial over the protocol without a kernel: the simulated board (app + CAN node on
-// the plant) in one thread, the host's BoardClient in another, joined by an in-process
-// bus. Every window reaches the host through its five frames, and the host-received
-// energies match the plant's ground truth over the same ticks.
+// the plant) and the host's BoardClient, joined by the in-process bus of
+// sim_host/bus (sim::BusBoard, lock-stepped: the paper's scenarios run on it). Every
+// window reaches the host through its five frames, and the host-received energies match
+// the plant's ground truth over the same ticks.
 //
 // The same trial under a full-rate frame flood: besides the host's own traffic, the
 // board's CAN node receives two more frames every 100 µs tick (20,000 frames/s, about

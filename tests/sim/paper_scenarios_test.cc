@@ -31,7 +31,7 @@ struct Bench {
       : board(robot, app::DefaultJointConfig()) {
     calibration = RunCalibration(board, PaperCalibrationSweep());
   }
-  SimBoard board;
+  BusBoard board;
   CalibrationOutcome calibration;
 };
 
@@ -190,13 +190,13 @@ void ExpectSameTickStop(plant::SensorFaultKind kind, Fault expected,
   bench.board.plant().SetInterface(plant::LoadPlantParams("subject1").interface);
   app::JointApp& app = bench.board.app();
   ASSERT_EQ(app.StartTrial(PaperSine(25)).result, app::CommandOutcomeCode::kAccepted);
-  for (int i = 0; i < 8000; ++i) bench.board.Tick();  // mid-flexion
+  for (int i = 0; i < 8000; ++i) bench.board.board().Tick();  // mid-flexion
   ASSERT_EQ(app.state(), app::BoardState::kRunning);
-  ASSERT_TRUE(bench.board.io().bridge_enabled());
+  ASSERT_TRUE(bench.board.board().io().bridge_enabled());
   bench.board.plant().InjectFault({kind, 0, jump});
-  bench.board.Tick();
-  EXPECT_FALSE(bench.board.io().bridge_enabled());
-  EXPECT_EQ(bench.board.io().duty(), 0.0);
+  bench.board.board().Tick();
+  EXPECT_FALSE(bench.board.board().io().bridge_enabled());
+  EXPECT_EQ(bench.board.board().io().duty(), 0.0);
   EXPECT_EQ(app.state(), app::BoardState::kFault);
   EXPECT_EQ(app.last().raised, expected);
 }
@@ -224,15 +224,15 @@ TEST(SimFaults, StuckJointEncoderIsCaught) {
   app::JointApp& app = bench.board.app();
   ASSERT_EQ(app.StartTrial(PaperSine(25)).result, app::CommandOutcomeCode::kAccepted);
   // 1.5 s of rest, then a quarter cycle: the first flexion peak.
-  for (int i = 0; i < 15000 + 5000; ++i) bench.board.Tick();
+  for (int i = 0; i < 15000 + 5000; ++i) bench.board.board().Tick();
   bench.board.plant().InjectFault({plant::SensorFaultKind::kJointStuck, 0, 0});
   int ticks = 0;
   while (app.state() != app::BoardState::kFault && ticks < 10000) {
-    bench.board.Tick();
+    bench.board.board().Tick();
     ++ticks;
   }
   EXPECT_EQ(app.last().raised, Fault::kJointStuck);
-  EXPECT_FALSE(bench.board.io().bridge_enabled());
+  EXPECT_FALSE(bench.board.board().io().bridge_enabled());
   EXPECT_LT(ticks, 10000);
   std::printf("[ fault    ] stuck joint encoder caught after %d ticks\n", ticks);
 }
