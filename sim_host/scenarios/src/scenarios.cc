@@ -33,6 +33,26 @@ std::vector<double> Resample(const std::vector<double>& values, std::size_t begi
   return out;
 }
 
+// `record` onto the board over the bus, as `mjc cal upload` sends it (ISO-TP); throws
+// unless the board accepts it.
+void Upload(BusBoard& bus, const Calibration& record) {
+  protocol::CalibrationRecord r;
+  r.backlash = record.backlash;
+  r.sea_stiffness = record.sea_stiffness;
+  r.joint_zero_count = record.joint_zero_count;
+  const auto isotp = bus.Connect();
+  std::string why;
+  const host::UploadOutcome sent =
+      host::UploadCalibration(bus.client(), *isotp, r, 1000, &why);
+  if (sent.status != host::UploadStatus::kAnswered) {
+    throw std::runtime_error("the calibration upload was not answered: " + why);
+  }
+  if (sent.result != protocol::CalibrationResult::kAccepted) {
+    throw std::runtime_error("the board refused the calibration: " +
+                             host::DescribeCalibrationResult(sent.result, sent.detail));
+  }
+}
+
 double EtaPercent(double load, double unload) {
   return load > 0 ? (1.0 - std::fabs(unload) / load) * 100.0 : 0.0;
 }
@@ -536,11 +556,10 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
         plant::PlantParams params = robot;
         params.interface = spec.interface;
         params.sensors.noise_seed = spec.noise_seed;
-        // A board powered up with the calibration the sweep uploaded (as one that
-        // restored it from its flash).
+        // A board powered up at rest, given the record the sweep made as `mjc cal
+        // upload` gives it.
         BusBoard board(params, config);
-        board.app().SetCalibration(record);
-        board.Run(1);
+        Upload(board, record);
         out[i] = RunTrial(board, PaperSine(spec.amplitude_deg, 5, spec.frequency_hz),
                           spec.keep_trace);
       } catch (...) {

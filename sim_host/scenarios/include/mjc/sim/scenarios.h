@@ -252,9 +252,9 @@ ModelComparison CompareWithModel(const SubjectSweep& measured,
                                  const plant::InterfaceParams& model);
 
 // One trial on a board and bus of its own: the robot with `interface` donned and its
-// sensor noise seeded by `noise_seed`, powered up at rest with the calibration record
-// in force (as a board that restored it from its flash), then
-// RunTrial(PaperSine(amplitude_deg, 5, frequency_hz)) over the bus.
+// sensor noise seeded by `noise_seed`, powered up at rest, given the calibration
+// record over the bus (ISO-TP, as `mjc cal upload`), then
+// RunTrial(PaperSine(amplitude_deg, 5, frequency_hz)).
 struct TrialSpec {
   plant::InterfaceParams interface;
   double amplitude_deg = 25.0;
