@@ -12,6 +12,7 @@
 // without threads to hand frames over (the paper's trials run many boards side by side
 // instead). The host's clock is the board's (Clock()): every wait of BoardClient —
 // its patience, the silence bound, its heartbeats' cadence — is counted in board time.
+// A bus, its links and its client belong to one thread at a time.
 //
 // What the protocol does not carry at the full tick rate (the plant's ground truth,
 // the board's per-tick values) stays on the board's side: SetBeforeTick and
