@@ -508,6 +508,17 @@ int Report::Finish(double wall_s, double simulated_s) {
                   {"simulated_s", simulated_s},
                   {"realtime_factor", wall_s > 0 ? simulated_s / wall_s : 0.0},
                   {"figures", figures_}};
+  // Where the numbers come from (sim/scenarios.h): what a lab's tools would get, and
+  // what only the simulator can read on the board's side of the bus.
+  json_["run"]["sources"] = {
+      {"protocol",
+       "calibration: the sweep's angle telemetry, the fit, the record uploaded over "
+       "ISO-TP and read back; trials: every window's energies, eta, ticks and "
+       "attachment fit as the board's window frames carried them"},
+      {"board_side_probe",
+       "the plant's truth (interface energy and power per tick, aligned to the "
+       "windows' ticks); the board's power every tick (power RMSE, Fig. 9 profiles); "
+       "Fig. 8's trace"}};
   std::ofstream(out_ / "results.json") << json_.dump(2) << '\n';
   std::ofstream(out_ / "tables.md")
       << "# Interface power on the simulated Maestro joint\n"
