@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <mutex>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "mjc/host/board_client.h"
