@@ -35,15 +35,19 @@ std::vector<double> Resample(const std::vector<double>& values, std::size_t begi
   return out;
 }
 
-// `record` onto the board over the bus, as `mjc cal upload` sends it (ISO-TP); throws
-// unless the board accepts it.
+// `record` onto the board over the bus, as `mjc cal upload` sends it (ISO-TP), the
+// board identified first as the tools do; throws unless the board accepts it.
 void Upload(BusBoard& bus, const Calibration& record) {
+  std::string why;
+  host::WaitEnd end{};
+  if (!bus.client().Identify(&end, &why)) {
+    throw std::runtime_error("the board was not identified: " + why);
+  }
   protocol::CalibrationRecord r;
   r.backlash = record.backlash;
   r.sea_stiffness = record.sea_stiffness;
   r.joint_zero_count = record.joint_zero_count;
   const auto isotp = bus.Connect();
-  std::string why;
   const host::UploadOutcome sent =
       host::UploadCalibration(bus.client(), *isotp, r, 1000, &why);
   if (sent.status != host::UploadStatus::kAnswered) {
