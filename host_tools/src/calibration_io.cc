@@ -1,5 +1,6 @@
 #include "mjc/host/calibration_io.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -183,6 +184,101 @@ UploadOutcome UploadCalibration(const std::string& iface, int node,
   out.status = UploadStatus::kAnswered;
   out.result = static_cast<protocol::CalibrationResult>((*reply)[0]);
   out.detail = (*reply)[1];
+  return out;
+}
+
+UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
+                                const protocol::CalibrationRecord& record, int timeout_ms,
+                                std::string* why) {
+  using protocol::CanFrame;
+  using protocol::Function;
+  const std::uint8_t n = board.node();
+  const std::uint32_t to_board =
+      protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpToBoard), n);
+  const std::uint32_t from_board =
+      protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), n);
+  UploadOutcome out;
+  const IdFilter answers{from_board, 0x7FF};
+  if (!isotp.SetFilters({&answers, 1}, why)) {
+    out.status = UploadStatus::kLinkFailed;
+    return out;
+  }
+  while (isotp.Receive(0)) {
+  }  // heard before the record went out: no answer to it
+  const auto bytes = protocol::EncodeCalibration(record);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Patience patience{std::chrono::milliseconds(timeout_ms)};
+  std::optional<CanFrame> got;
+  // The board's next ISO-TP frame, within the patience; false with the reason.
+  const auto next = [&](WaitEnd* end) {
+    got.reset();
+    const auto arrived = [&] {
+      if (!got) {
+        if (const ReceiveResult r = isotp.Receive(0)) got = r->frame;
+      }
+      return got.has_value();
+    };
+    return board.Await(arrived, patience, end, why);
+  };
+  const auto fail = [&](UploadStatus status) {
+    out.status = status;
+    out.elapsed_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+            .count();
+    return out;
+  };
+  CanFrame f;
+  f.id = to_board;
+  f.length = 8;
+  f.data[0] = static_cast<std::uint8_t>(0x10u | (bytes.size() >> 8));
+  f.data[1] = static_cast<std::uint8_t>(bytes.size());
+  std::copy_n(bytes.begin(), 6, f.data.begin() + 2);
+  if (!isotp.Send(f, why)) return fail(UploadStatus::kLinkFailed);
+  std::size_t at = 6;
+  std::uint8_t sequence = 1;
+  WaitEnd end{};
+  while (at < bytes.size()) {
+    // Flow control: continue (with a block size), wait, or overflow.
+    if (!next(&end)) {
+      return fail(end == WaitEnd::kLinkFailed ? UploadStatus::kLinkFailed
+                                              : UploadStatus::kNoAnswer);
+    }
+    const std::uint8_t pci = got->data[0];
+    if ((pci & 0xF0u) != 0x30u) continue;  // not flow control: not for this transfer
+    if ((pci & 0x0Fu) == 1) continue;      // wait: the next flow control follows
+    if ((pci & 0x0Fu) != 0) {
+      *why = "node " + std::to_string(n) +
+             " refused the record's transfer (flow status " +
+             std::to_string(pci & 0x0Fu) + ")";
+      return fail(UploadStatus::kLinkFailed);
+    }
+    const std::size_t block = got->data[1];
+    for (std::size_t k = 0; at < bytes.size() && (block == 0 || k < block); ++k) {
+      const std::size_t size = std::min<std::size_t>(7, bytes.size() - at);
+      f.length = static_cast<std::uint8_t>(size + 1);
+      f.data[0] = static_cast<std::uint8_t>(0x20u | sequence);
+      std::copy_n(bytes.begin() + static_cast<std::ptrdiff_t>(at), size,
+                  f.data.begin() + 1);
+      if (!isotp.Send(f, why)) return fail(UploadStatus::kLinkFailed);
+      at += size;
+      sequence = static_cast<std::uint8_t>((sequence + 1) & 0x0Fu);
+    }
+  }
+  // The answer: one single frame.
+  do {
+    if (!next(&end)) {
+      return fail(end == WaitEnd::kLinkFailed ? UploadStatus::kLinkFailed
+                                              : UploadStatus::kNoAnswer);
+    }
+  } while ((got->data[0] & 0xF0u) != 0x00u);
+  if (got->data[0] != 2 || got->length < 3) {
+    *why = "node " + std::to_string(n) + " answered with " +
+           std::to_string(got->data[0] & 0x0Fu) + " bytes, not [result, detail]";
+    return fail(UploadStatus::kMalformedReply);
+  }
+  out = fail(UploadStatus::kAnswered);
+  out.result = static_cast<protocol::CalibrationResult>(got->data[1]);
+  out.detail = got->data[2];
   return out;
 }
 

@@ -508,6 +508,17 @@ int Report::Finish(double wall_s, double simulated_s) {
                   {"simulated_s", simulated_s},
                   {"realtime_factor", wall_s > 0 ? simulated_s / wall_s : 0.0},
                   {"figures", figures_}};
+  // Where the numbers come from (sim/scenarios.h): what a lab's tools would get, and
+  // what only the simulator can read on the board's side of the bus.
+  json_["run"]["sources"] = {
+      {"protocol",
+       "calibration: the sweep's angle telemetry, the fit, the record uploaded over "
+       "ISO-TP and read back; trials: every window's energies, eta, ticks and "
+       "attachment fit as the board's window frames carried them"},
+      {"board_side_probe",
+       "the plant's truth (interface energy and power per tick, aligned to the "
+       "windows' ticks); the board's power every tick (power RMSE, Fig. 9 profiles); "
+       "Fig. 8's trace"}};
   std::ofstream(out_ / "results.json") << json_.dump(2) << '\n';
   std::ofstream(out_ / "tables.md")
       << "# Interface power on the simulated Maestro joint\n"
@@ -524,7 +535,11 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
         const std::vector<plant::PlantParams>& subjects, const ControlConfig& config,
         std::uint64_t seed, int threads, double frequency_hz, Report& report) {
   const auto start = std::chrono::steady_clock::now();
-  sim::SimBoard board(robot, config);
+  // The board on a bus of its own, calibrated by the host library as `mjc calibrate`
+  // calibrates one; the trials then run over buses of their own as `mjc trial` runs
+  // them (sim/scenarios.h says which figures come over the bus and which from the
+  // board's side).
+  sim::BusBoard board(robot, config);
   if (board.app().control().config().velocity_window != config.velocity_window) {
     throw std::runtime_error("the board refused the configuration (velocity window " +
                              std::to_string(config.velocity_window) + ")");

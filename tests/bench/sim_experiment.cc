@@ -56,7 +56,7 @@ int main() {
 
   // The experiment against the model, the three subjects.
   const plant::PlantParams robot = rig::PaperRobot();
-  SimBoard board(robot, app::DefaultJointConfig());
+  BusBoard board(robot, app::DefaultJointConfig());
   const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep());
   if (!cal.uploaded) {
     std::fprintf(stderr, "sim_experiment: calibration failed: %s\n", cal.message.c_str());
@@ -83,7 +83,7 @@ int main() {
   // The α = 1.25 example joint: calibrated from its description, then the sweep.
   const host::RobotDescription alpha_robot =
       rig::AlphaExampleRobot(std::string(MJC_SOURCE_DIR) + "/robots");
-  SimBoard alpha_board(rig::AlphaExamplePlant(alpha_robot), app::DefaultJointConfig());
+  BusBoard alpha_board(rig::AlphaExamplePlant(alpha_robot), app::DefaultJointConfig());
   const CalibrationOutcome alpha_cal =
       RunCalibration(alpha_board, PaperCalibrationSweep(), {&alpha_robot});
   if (!alpha_cal.uploaded) {

@@ -37,7 +37,7 @@ int main() {
 
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t start_cpu = std::clock();  // one thread runs everything below
-  SimBoard board(robot, app::DefaultJointConfig());
+  BusBoard board(robot, app::DefaultJointConfig());
   const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep());
   if (!cal.uploaded) {
     std::fprintf(stderr, "sim_fidelity: calibration failed: %s\n", cal.message.c_str());

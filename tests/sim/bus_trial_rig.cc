@@ -1,13 +1,10 @@
 #include "bus_trial_rig.h"
 
-#include <atomic>
-#include <mutex>
 #include <numbers>
-#include <thread>
 
+#include "mjc/app/joint_config.h"
 #include "mjc/plant/params.h"
-#include "mjc/sim/link_can_port.h"
-#include "mjc/sim/scenarios.h"
+#include "mjc/sim/bus_board.h"
 
 namespace mjc::bus_trial {
 
@@ -51,79 +48,40 @@ protocol::CanFrame Flood::Next() {
   return f;
 }
 
-namespace {
-
-// The board's port on the in-process bus, counting what passes: the host's frames in,
-// the parameter replies out.
-class CountingPort final : public hal::CanPort {
- public:
-  explicit CountingPort(host::CanLink* link) : port_(link) {}
-  std::uint32_t received = 0;
-  std::uint32_t param_replies = 0;
-
- private:
-  bool DoSend(const CanFrame& f) override {
-    if (FunctionOf(f.id) == static_cast<std::uint8_t>(Function::kParamValue)) {
-      ++param_replies;
-    }
-    return port_.Send(f);
-  }
-  bool DoReceive(CanFrame* f) override {
-    if (!port_.Receive(f)) return false;
-    ++received;
-    return true;
-  }
-  std::uint32_t DoTakeBusOff() override { return port_.TakeBusOff(); }
-  hal::CanPortCounters DoCounters() const override { return port_.counters(); }
-  sim::LinkCanPort port_;
-};
-
-}  // namespace
-
 BoardRun RunTrial(Flood* flood, int per_tick) {
-  auto bus = host::InProcessBus::Create();
-  auto board_link = bus->Connect();
-  auto host_link = bus->Connect();
-
   plant::PlantParams params = plant::LoadPlantParams("default");
   params.interface = plant::LoadPlantParams("subject1").interface;
-  CountingPort port(board_link.get());
-  sim::SimBoard board(params, app::JointBoardConfig{app::DefaultJointConfig(), {}, 0, 1},
-                      &port);
+  sim::BusBoard bus(params, app::DefaultJointConfig());
   Calibration cal;
   cal.backlash.c_right = Angle::Quantize(params.cable.c_right_rad);
   cal.backlash.c_left = Angle::Quantize(params.cable.c_left_rad);
-  board.app().SetCalibration(cal);
-  board.Tick();
-  app::CanNode& node = board.board().node();
+  bus.app().SetCalibration(cal);
+  bus.Run(1);
+  app::CanNode& node = bus.board().board().node();
 
+  // The board's side: the flood into its CAN node and the plant's truth before every
+  // tick, the tick's counter and state after it.
   BoardRun run;
-  std::mutex truth_mutex;
-  std::atomic<bool> stop{false};
-  std::thread board_thread([&] {
-    std::uint32_t last_tick = board.app().last().telemetry.tick;
-    while (!stop) {
-      for (int i = 0; flood != nullptr && i < per_tick; ++i) {
-        node.HandleFrame(flood->Next());
-        ++run.flooded;
-      }
-      {
-        std::lock_guard lock(truth_mutex);
-        const std::uint32_t tick = board.app().last().telemetry.tick + 1;
-        if (run.truth_energy.size() <= tick) run.truth_energy.resize(tick + 1, 0.0);
-        run.truth_energy[tick] = board.plant().truth().interface_energy_J;
-      }
-      board.Tick();
-      ++run.ticks;
-      const std::uint32_t tick = board.app().last().telemetry.tick;
-      if (tick != last_tick + 1) ++run.tick_gaps;
-      last_tick = tick;
-      run.faulted = run.faulted || board.app().state() == app::BoardState::kFault;
-      board.Poll();
+  std::uint32_t last_tick = bus.app().last().telemetry.tick;
+  bus.SetBeforeTick([&](sim::SimBoard& board) {
+    for (int i = 0; flood != nullptr && i < per_tick; ++i) {
+      node.HandleFrame(flood->Next());
+      ++run.flooded;
     }
+    const std::uint32_t tick = board.app().last().telemetry.tick + 1;
+    if (run.truth_energy.size() <= tick) run.truth_energy.resize(tick + 1, 0.0);
+    run.truth_energy[tick] = board.plant().truth().interface_energy_J;
+  });
+  bus.SetAfterTick([&](sim::SimBoard& board) {
+    ++run.ticks;
+    const std::uint32_t tick = board.app().last().telemetry.tick;
+    if (tick != last_tick + 1) ++run.tick_gaps;
+    last_tick = tick;
+    run.faulted = run.faulted || board.app().state() == app::BoardState::kFault;
   });
 
-  host::BoardClient client(host_link.get(), 1);
+  // The host's side: mjc trial's runner on the bus's client.
+  host::BoardClient& client = bus.client();
   TrialConfig config;
   config.amplitude = Angle::Quantize(15.0 * std::numbers::pi / 180.0);
   config.frequency_mHz = 500;
@@ -131,10 +89,10 @@ BoardRun RunTrial(Flood* flood, int per_tick) {
   config.rest_100ms = 5;
   run.trial = host::RunBoardTrial(
       client, config, [&](const host::BoardWindow&) { ++run.progress_lines; });
-  stop = true;
-  board_thread.join();
-  run.from_host = port.received;
-  run.param_replies = port.param_replies;
+  bus.SetBeforeTick(nullptr);
+  bus.SetAfterTick(nullptr);
+  run.from_host = bus.from_host();
+  run.param_replies = bus.sent(Function::kParamValue);
   run.host_malformed = client.malformed();
   run.counters = node.counters();
   return run;

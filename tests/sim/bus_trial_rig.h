@@ -1,6 +1,7 @@
 // A trial over the protocol without a kernel: the simulated board (app + CAN node on
-// the plant) in one thread, the host's BoardClient in another, joined by an in-process
-// bus; optionally under a full-rate frame flood. Shared by tests/sim/bus_trial_test.cc
+// the plant) and the host's BoardClient with mjc trial's runner, joined by the
+// in-process bus the paper's scenarios use (sim::BusBoard, lock-stepped); optionally
+// under a full-rate frame flood. Shared by tests/sim/bus_trial_test.cc
 // (the goals, asserted) and tests/bench/sim_flood.cc (the sim_flood_* figures of
 // ./bench).
 //

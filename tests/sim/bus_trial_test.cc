@@ -1,7 +1,8 @@
 // A trial over the protocol without a kernel: the simulated board (app + CAN node on
-// the plant) in one thread, the host's BoardClient in another, joined by an in-process
-// bus. Every window reaches the host through its five frames, and the host-received
-// energies match the plant's ground truth over the same ticks.
+// the plant) and the host's BoardClient, joined by the in-process bus of
+// sim_host/bus (sim::BusBoard, lock-stepped: the paper's scenarios run on it). Every
+// window reaches the host through its five frames, and the host-received energies match
+// the plant's ground truth over the same ticks.
 //
 // The same trial under a full-rate frame flood: besides the host's own traffic, the
 // board's CAN node receives two more frames every 100 µs tick (20,000 frames/s, about
@@ -17,7 +18,11 @@
 #include <cmath>
 
 #include "bus_trial_rig.h"
+#include "mjc/app/joint_config.h"
+#include "mjc/host/calibration_io.h"
 #include "mjc/host/report.h"
+#include "mjc/plant/params.h"
+#include "mjc/sim/bus_board.h"
 
 namespace {
 
@@ -74,6 +79,80 @@ TEST(BusTrial, FullRateFloodKeepsEveryWindowAndCountsEveryFrame) {
   // Every parameter read answered (the flood's, and the host's own few).
   EXPECT_GE(run.param_replies, flood.param_reads_sent());
   ExpectWindowsMatchTruth(run);
+}
+
+// The bus is lock-stepped: the same trial twice gives the same windows bit for bit
+// (the same ticks, the same energies), whatever this machine did meanwhile.
+TEST(BusBoard, RunsAreTheSameBitForBit) {
+  const BoardRun a = RunTrial(nullptr, 0);
+  const BoardRun b = RunTrial(nullptr, 0);
+  ASSERT_TRUE(a.trial.completed && b.trial.completed);
+  ASSERT_EQ(a.trial.windows.size(), b.trial.windows.size());
+  for (std::size_t i = 0; i < a.trial.windows.size(); ++i) {
+    const host::BoardWindow &x = a.trial.windows[i], &y = b.trial.windows[i];
+    EXPECT_EQ(x.start_tick, y.start_tick);
+    EXPECT_EQ(x.end_tick, y.end_tick);
+    EXPECT_EQ(x.loading_J, y.loading_J);
+    EXPECT_EQ(x.unloading_J, y.unloading_J);
+    EXPECT_EQ(x.stiffness_Nm_rad, y.stiffness_Nm_rad);
+  }
+  EXPECT_EQ(a.ticks, b.ticks);
+  EXPECT_EQ(a.truth_energy, b.truth_energy);
+}
+
+// The board runs only while the host waits for it, and by no more than the wait's
+// length of its own time.
+TEST(BusBoard, RunsOnlyWhileTheHostWaits) {
+  sim::BusBoard bus(plant::LoadPlantParams("default"), app::DefaultJointConfig());
+  host::BoardClient& client = bus.client();
+  std::string why;
+  ASSERT_TRUE(client.Send(ParamRead{ParamId::kTelemetryAnglesHz}, &why)) << why;
+  EXPECT_EQ(bus.ticks(), 0u);
+  ASSERT_TRUE(client.Poll(20, &why)) << why;
+  EXPECT_GT(bus.ticks(), 0u);
+  EXPECT_LE(bus.ticks(), 200u);  // 20 ms at 10 kHz
+  const std::uint64_t before = bus.ticks();
+  const auto rate = client.ReadParam(ParamId::kTelemetryAnglesHz, 500, &why);
+  ASSERT_TRUE(rate) << why;
+  EXPECT_EQ(*rate, TelemetryRates{}.angles_hz);
+  EXPECT_LE(bus.ticks() - before, 5000u);  // within the read's 500 ms
+}
+
+// mjc calibrate's upload without the kernel's ISO-TP: segmented on a link of the bus,
+// answered by the board's own receiver, and held (read back as the tool does); a
+// record the board's checks refuse is answered with why and changes nothing.
+TEST(BusBoard, CalibrationUploadIsAnsweredAndHeld) {
+  sim::BusBoard bus(plant::LoadPlantParams("default"), app::DefaultJointConfig());
+  host::BoardClient& client = bus.client();
+  const auto isotp = bus.Connect();
+  std::string why;
+
+  CalibrationRecord bad;
+  bad.backlash.c_right = Angle::Quantize(-0.02);  // c_r below c_l: no play operator
+  bad.backlash.c_left = Angle::Quantize(0.02);
+  const host::UploadOutcome refused =
+      host::UploadCalibration(client, *isotp, bad, 1000, &why);
+  ASSERT_EQ(refused.status, host::UploadStatus::kAnswered) << why;
+  EXPECT_EQ(refused.result, CalibrationResult::kOutOfRange);
+  auto held = host::ReadCalibration(client, &why);
+  ASSERT_TRUE(held) << why;
+  EXPECT_FALSE(held->calibrated);
+
+  CalibrationRecord good;
+  good.backlash.c_right = Angle::Quantize(0.019);
+  good.backlash.c_left = Angle::Quantize(-0.016);
+  good.joint_zero_count = 42;
+  const host::UploadOutcome sent =
+      host::UploadCalibration(client, *isotp, good, 1000, &why);
+  ASSERT_EQ(sent.status, host::UploadStatus::kAnswered) << why;
+  EXPECT_EQ(sent.result, CalibrationResult::kAccepted);
+  held = host::ReadCalibration(client, &why);
+  ASSERT_TRUE(held) << why;
+  EXPECT_TRUE(held->calibrated);
+  EXPECT_EQ(held->record.backlash.c_right, good.backlash.c_right);
+  EXPECT_EQ(held->record.backlash.c_left, good.backlash.c_left);
+  EXPECT_EQ(held->record.joint_zero_count, 42);
+  EXPECT_TRUE(bus.app().calibrated());  // the board's side agrees
 }
 
 }  // namespace

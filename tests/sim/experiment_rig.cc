@@ -99,7 +99,7 @@ plant::PlantParams RobotWithJointHeld(double stiffness_Nm_per_rad) {
 }
 
 CalibrationOutcome CalibrateHeldJoint(double stiffness_Nm_per_rad) {
-  SimBoard board(RobotWithJointHeld(stiffness_Nm_per_rad), app::DefaultJointConfig());
+  BusBoard board(RobotWithJointHeld(stiffness_Nm_per_rad), app::DefaultJointConfig());
   return RunCalibration(board, PaperCalibrationSweep());
 }
 

@@ -38,7 +38,7 @@ TEST(SimFrequency, BoardMatchesPlantTruthFromQuarterToTwoHertz) {
   // its own: subject 1 at 6°, 11° and 25°, subject 3 (the loosest attachment) at 25°,
   // at each frequency.
   const plant::PlantParams robot = Robot();
-  SimBoard board(robot, app::DefaultJointConfig());
+  BusBoard board(robot, app::DefaultJointConfig());
   const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep());
   ASSERT_TRUE(cal.uploaded) << cal.message;
   const plant::PlantParams s1 = plant::LoadPlantParams("subject1");

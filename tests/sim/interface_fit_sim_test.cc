@@ -109,7 +109,7 @@ TEST(SimInterfaceFit, BoardFindsTheAttachmentAtTwoNoiseLevels) {
   for (const double noise : {0.7, 2.1}) {
     plant::PlantParams robot = plant::LoadPlantParams("default");
     robot.sensors.joint_noise_counts = noise;
-    SimBoard board(robot, app::DefaultJointConfig());
+    BusBoard board(robot, app::DefaultJointConfig());
     const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep());
     ASSERT_TRUE(cal.uploaded) << cal.message;
     for (const Attachment& a : attachments) {

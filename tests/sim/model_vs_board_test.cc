@@ -22,7 +22,7 @@ TEST(SimModel, PredictionFromTheIdentifiedAttachmentAgreesWithTheBoard) {
   // Setup: a calibrated board's record; subjects 1 and 3 (the stiffest and the loosest
   // of the shipped attachments relative to their damping).
   const plant::PlantParams robot = rig::PaperRobot();
-  SimBoard board(robot, app::DefaultJointConfig());
+  BusBoard board(robot, app::DefaultJointConfig());
   const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep());
   ASSERT_TRUE(cal.uploaded) << cal.message;
   const std::vector<plant::PlantParams> subjects = {plant::LoadPlantParams("subject1"),

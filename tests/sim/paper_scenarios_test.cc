@@ -31,7 +31,7 @@ struct Bench {
       : board(robot, app::DefaultJointConfig()) {
     calibration = RunCalibration(board, PaperCalibrationSweep());
   }
-  SimBoard board;
+  BusBoard board;
   CalibrationOutcome calibration;
 };
 
@@ -54,6 +54,25 @@ TEST(SimCalibration, RecoversSeveralSlackPairsWithinGoal) {
         "[ calib    ] c_r %+.3f° err %+.4f°, c_l %+.3f° err %+.4f°, fit %.1f ms\n",
         pair[0], cal.error_right_deg, pair[1], cal.error_left_deg, cal.fit.elapsed_ms);
   }
+}
+
+// The same sweep on a board that sat idle for 100 ms first, as a lab's board sits before
+// `mjc calibrate` (and as the tools' identification of a node takes). Disabled: for the
+// wide pair (2.5°, 1.0°) the fit's local stage then stays in the lag-free basin
+// (c_r +0.066°, c_l −0.067°, lag 0.02 ms, rms 0.044° against 0.023° at the right fit;
+// host::FitBacklash's global stage searches the lag on a record decimated to one
+// sample in 6 ms, likely too coarse for a 2 ms lag). Enable once the fit finds the
+// lag's basin from there.
+TEST(SimCalibration, DISABLED_RecoversAWidePairAfterTheBoardSatIdle) {
+  plant::PlantParams robot = Robot();
+  robot.cable.c_right_rad = 2.5 * kDeg;
+  robot.cable.c_left_rad = 1.0 * kDeg;
+  BusBoard board(robot, app::DefaultJointConfig());
+  board.Run(board.tick_hz() / 10);
+  const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep());
+  ASSERT_TRUE(cal.uploaded) << cal.message << " / " << cal.fit.message;
+  EXPECT_LE(std::fabs(cal.error_right_deg), 0.05);
+  EXPECT_LE(std::fabs(cal.error_left_deg), 0.05);
 }
 
 TEST(SimTrial, BoardMatchesPlantTruthAcrossAmplitudes) {
@@ -190,13 +209,13 @@ void ExpectSameTickStop(plant::SensorFaultKind kind, Fault expected,
   bench.board.plant().SetInterface(plant::LoadPlantParams("subject1").interface);
   app::JointApp& app = bench.board.app();
   ASSERT_EQ(app.StartTrial(PaperSine(25)).result, app::CommandOutcomeCode::kAccepted);
-  for (int i = 0; i < 8000; ++i) bench.board.Tick();  // mid-flexion
+  for (int i = 0; i < 8000; ++i) bench.board.board().Tick();  // mid-flexion
   ASSERT_EQ(app.state(), app::BoardState::kRunning);
-  ASSERT_TRUE(bench.board.io().bridge_enabled());
+  ASSERT_TRUE(bench.board.board().io().bridge_enabled());
   bench.board.plant().InjectFault({kind, 0, jump});
-  bench.board.Tick();
-  EXPECT_FALSE(bench.board.io().bridge_enabled());
-  EXPECT_EQ(bench.board.io().duty(), 0.0);
+  bench.board.board().Tick();
+  EXPECT_FALSE(bench.board.board().io().bridge_enabled());
+  EXPECT_EQ(bench.board.board().io().duty(), 0.0);
   EXPECT_EQ(app.state(), app::BoardState::kFault);
   EXPECT_EQ(app.last().raised, expected);
 }
@@ -224,15 +243,15 @@ TEST(SimFaults, StuckJointEncoderIsCaught) {
   app::JointApp& app = bench.board.app();
   ASSERT_EQ(app.StartTrial(PaperSine(25)).result, app::CommandOutcomeCode::kAccepted);
   // 1.5 s of rest, then a quarter cycle: the first flexion peak.
-  for (int i = 0; i < 15000 + 5000; ++i) bench.board.Tick();
+  for (int i = 0; i < 15000 + 5000; ++i) bench.board.board().Tick();
   bench.board.plant().InjectFault({plant::SensorFaultKind::kJointStuck, 0, 0});
   int ticks = 0;
   while (app.state() != app::BoardState::kFault && ticks < 10000) {
-    bench.board.Tick();
+    bench.board.board().Tick();
     ++ticks;
   }
   EXPECT_EQ(app.last().raised, Fault::kJointStuck);
-  EXPECT_FALSE(bench.board.io().bridge_enabled());
+  EXPECT_FALSE(bench.board.board().io().bridge_enabled());
   EXPECT_LT(ticks, 10000);
   std::printf("[ fault    ] stuck joint encoder caught after %d ticks\n", ticks);
 }

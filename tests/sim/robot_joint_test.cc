@@ -90,7 +90,7 @@ TEST(RobotDescription, CalibratesAJointWithAlphaNotOne) {
 
   for (const bool fit_alpha : {false, true}) {
     SCOPED_TRACE(fit_alpha ? "α fitted" : "α from the description");
-    SimBoard board(params, app::DefaultJointConfig());
+    BusBoard board(params, app::DefaultJointConfig());
     const CalibrationOutcome cal =
         RunCalibration(board, PaperCalibrationSweep(), {&robot, fit_alpha});
     ASSERT_TRUE(cal.uploaded) << cal.message << " / " << cal.fit.message;
@@ -123,7 +123,7 @@ TEST(RobotDescription, TrialsOnAJointWithAlphaNotOneEndInTheirRest) {
   // model: the unloading there is not judged against truth here.
   const host::RobotDescription robot = Load("example-alpha-1.25.json");
   const plant::PlantParams params = ExamplePlant(robot);
-  SimBoard board(params, app::DefaultJointConfig());
+  BusBoard board(params, app::DefaultJointConfig());
   const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep(), {&robot});
   ASSERT_TRUE(cal.uploaded) << cal.message << " / " << cal.fit.message;
   for (const char* subject : {"subject1", "subject3"}) {
@@ -151,7 +151,7 @@ TEST(RobotDescription, TheDefaultAssumptionsMiscalibrateThatJoint) {
   const host::RobotDescription robot = Load("example-alpha-1.25.json");
   const plant::PlantParams params = ExamplePlant(robot);
   const Truth truth = TruthOf(params);
-  SimBoard board(params, app::DefaultJointConfig());
+  BusBoard board(params, app::DefaultJointConfig());
   const CalibrationOutcome cal = RunCalibration(board, PaperCalibrationSweep());
   const bool slack_right =
       cal.uploaded && std::fabs(cal.fit.c_right_rad - truth.c_right_rad) <= 0.05 * kDeg &&

@@ -2,24 +2,22 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <mutex>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "mjc/host/board_client.h"
+#include "mjc/host/calibration_io.h"
 #include "mjc/host/describe.h"
+#include "mjc/host/trial_runner.h"
 
 namespace mjc::sim {
 namespace {
-
-// Ticks the board keeps running after a trial ends, so that windows still inside the
-// estimator's delay line complete.
-std::uint32_t FlushTicks(const SimBoard& board) {
-  return static_cast<std::uint32_t>(board.tick_hz() / 10);  // 100 ms > any delay
-}
 
 std::vector<double> Resample(const std::vector<double>& values, std::size_t begin,
                              std::size_t end) {
@@ -35,6 +33,30 @@ std::vector<double> Resample(const std::vector<double>& values, std::size_t begi
     out[static_cast<std::size_t>(i)] = a + f * (b - a);
   }
   return out;
+}
+
+// `record` onto the board over the bus, as `mjc cal upload` sends it (ISO-TP), the
+// board identified first as the tools do; throws unless the board accepts it.
+void Upload(BusBoard& bus, const Calibration& record) {
+  std::string why;
+  host::WaitEnd end{};
+  if (!bus.client().Identify(&end, &why)) {
+    throw std::runtime_error("the board was not identified: " + why);
+  }
+  protocol::CalibrationRecord r;
+  r.backlash = record.backlash;
+  r.sea_stiffness = record.sea_stiffness;
+  r.joint_zero_count = record.joint_zero_count;
+  const auto isotp = bus.Connect();
+  const host::UploadOutcome sent =
+      host::UploadCalibration(bus.client(), *isotp, r, 1000, &why);
+  if (sent.status != host::UploadStatus::kAnswered) {
+    throw std::runtime_error("the calibration upload was not answered: " + why);
+  }
+  if (sent.result != protocol::CalibrationResult::kAccepted) {
+    throw std::runtime_error("the board refused the calibration: " +
+                             host::DescribeCalibrationResult(sent.result, sent.detail));
+  }
 }
 
 double EtaPercent(double load, double unload) {
@@ -62,48 +84,90 @@ RampedSineConfig PaperCalibrationSweep() {
   return s;
 }
 
-CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep,
+CalibrationOutcome RunCalibration(BusBoard& bus, const RampedSineConfig& sweep,
                                   const CalibrationJoint& joint_of) {
+  // As `mjc calibrate` (host_tools/mjc/calibrate.cc) over the bus, with the host
+  // library's functions: the record in force read, the sweep configured and started,
+  // the board's angle telemetry kept until it is idle again, the fit, the upload over
+  // ISO-TP, the record read back.
   CalibrationOutcome out;
-  app::JointApp& app = board.app();
-  const plant::CableParams& cable = board.plant().params().cable;
+  const plant::CableParams& cable = bus.plant().params().cable;
   out.true_c_right_rad = cable.c_right_rad;
   out.true_c_left_rad = cable.c_left_rad;
-  if (app.StartCalibrationSweep(sweep).result != app::CommandOutcomeCode::kAccepted) {
-    out.message = "the board refused the calibration sweep";
+  host::BoardClient& client = bus.client();
+  std::string why;
+  const auto held = host::ReadCalibration(client, &why);
+  if (!held) {
+    out.message = "cannot read the calibration in force: " + why;
     return out;
   }
+  const auto rate_hz = client.ReadParam(protocol::ParamId::kTelemetryAnglesHz, 500, &why);
+  if (!rate_hz || *rate_hz <= 0) {
+    out.message = "no angle telemetry to fit: " + why;
+    return out;
+  }
+  protocol::SweepConfig config;
+  config.end_amplitude = sweep.end_amplitude;
+  config.frequency_mHz =
+      static_cast<std::uint16_t>(std::lround(sweep.frequency.ToDouble() * 1000));
+  config.repetitions = static_cast<std::uint8_t>(sweep.repetitions);
+  config.rest_100ms = static_cast<std::uint8_t>(sweep.rest_ms / 100);
+  if (!client.Send(config, &why)) {
+    out.message = why;
+    return out;
+  }
+  const auto started =
+      client.Command(protocol::CommandCode::kStartSweep, host::kStartAnswerMs, &why);
+  if (started != protocol::CommandOutcomeCode::kAccepted) {
+    out.message =
+        "the board refused the calibration sweep" +
+        (started ? ": " + std::string(host::OutcomeName(*started)) : ": " + why);
+    return out;
+  }
+  const std::uint64_t malformed_before = client.malformed();
   std::vector<double> motor, joint;
-  host::MotionEnd sweep_end(app::BoardState::kCalibrating);
-  for (std::uint64_t i = 0; i < 100ull * board.tick_hz() * 60; ++i) {
-    board.Tick();
-    const Telemetry& t = app.last().telemetry;
-    const bool over = sweep_end.Over(app.state());
-    if (sweep_end.started()) {
-      motor.push_back(t.motor.ToDouble());
-      joint.push_back(t.joint.ToDouble());
-      if (motor.size() % 10 == 0) {
-        out.motor_rad.push_back(motor.back());
-        out.joint_rad.push_back(joint.back());
-      }
+  client.TakeAngles();
+  client.KeepAngles(true);
+  const auto take_samples = [&] {
+    for (const host::AngleSample& a : client.TakeAngles()) {
+      motor.push_back(a.motor_rad);
+      joint.push_back(a.joint_rad);
     }
-    if (app.state() == app::BoardState::kFault) {
-      out.message =
-          "the sweep faulted: fault " + host::DescribeFault(app.control().fault());
-      return out;
-    }
-    if (over) break;
+  };
+  const double sweep_s =
+      config.repetitions / (config.frequency_mHz / 1000.0) + 2 * config.rest_100ms / 10.0;
+  const host::Patience patience{
+      std::chrono::milliseconds(static_cast<long>(2000 * sweep_s) + 2000)};
+  host::WaitEnd end{};
+  const bool ended = client.AwaitMotionEnd(protocol::BoardState::kCalibrating,
+                                           take_samples, patience, &end, &why);
+  client.KeepAngles(false);
+  // Fig. 7: θ_m, θ_j as the host received them.
+  out.motor_rad = motor;
+  out.joint_rad = joint;
+  if (!ended) {
+    out.message = "the sweep did not end: " + why;
+    return out;
+  }
+  if (client.status().state == protocol::BoardState::kFault) {
+    out.message =
+        "the sweep faulted: fault " + host::DescribeFault(client.status().fault);
+    return out;
+  }
+  if (client.malformed() != malformed_before) {
+    out.message = "malformed angle frames during the sweep: not fitting it";
+    return out;
   }
   // The joint trails the cable side by a few ms on the robot alone (the SEA spring
   // against the joint's damping): fit that lag too, or it reads as extra slack.
   host::BacklashFitOptions options;
   options.fit_lag = true;
-  options.sample_rate_hz = board.tick_hz();
-  const ControlConfig& board_config = app.control().config();
+  options.sample_rate_hz = *rate_hz;
   if (joint_of.robot != nullptr) {
     host::UseRobotAlpha(*joint_of.robot, joint_of.fit_alpha, &options);
+    // Recorded with the zero the board holds; fitted as with the joint's own.
     const double shift =
-        host::JointZeroShift(board_config.joint_encoder.zero_offset, *joint_of.robot);
+        host::JointZeroShift(held->record.joint_zero_count, *joint_of.robot);
     for (double& j : joint) j += shift;
   }
   out.fit = host::FitBacklash(motor, joint, options);
@@ -111,24 +175,42 @@ CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep
       (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / std::numbers::pi;
   out.error_left_deg =
       (out.fit.c_left_rad - out.true_c_left_rad) * 180.0 / std::numbers::pi;
-  std::string why;
-  const auto config = host::ToFirmwareConfig(out.fit, &why);
-  if (!config) {
+  const auto backlash = host::ToFirmwareConfig(out.fit, &why);
+  if (!backlash) {
     out.message = "calibration refused: " + why;
     return out;
   }
   // The backlash is what was fitted; stiffness and zero stay the board's unless the
-  // joint's description gives them.
-  protocol::CalibrationRecord record;
-  record.backlash = *config;
-  record.sea_stiffness = board_config.sea_stiffness;
-  record.joint_zero_count = board_config.joint_encoder.zero_offset;
+  // joint's description gives them. No fitted_at: a simulated run has no date, and
+  // its outputs are the same every run.
+  protocol::CalibrationRecord record = held->record;
+  record.backlash = *backlash;
   if (joint_of.robot != nullptr) host::UseRobotJoint(*joint_of.robot, &record);
+  record.fit_rms_urad =
+      static_cast<std::uint32_t>(std::lround(out.fit.rms_error_rad * 1e6));
+  record.fit_lag_us = static_cast<std::uint32_t>(std::lround(out.fit.lag_s * 1e6));
   out.record = {record.backlash, record.sea_stiffness, record.joint_zero_count};
-  const app::CommandOutcome o = app.SetCalibration(out.record);
-  board.Tick();
-  out.uploaded = o.result == app::CommandOutcomeCode::kAccepted && app.calibrated();
-  out.message = out.uploaded ? "uploaded" : "the board refused the calibration";
+  const auto isotp = bus.Connect();
+  const host::UploadOutcome sent =
+      host::UploadCalibration(client, *isotp, record, 1000, &why);
+  if (sent.status != host::UploadStatus::kAnswered) {
+    out.message = "the upload was not answered: " + why;
+    return out;
+  }
+  if (sent.result != protocol::CalibrationResult::kAccepted) {
+    out.message = "the board refused the calibration: " +
+                  host::DescribeCalibrationResult(sent.result, sent.detail);
+    return out;
+  }
+  // Read back: the board must hold exactly what was sent.
+  const auto back = host::ReadCalibration(client, &why);
+  out.uploaded = back && back->calibrated &&
+                 back->record.backlash.c_right == record.backlash.c_right &&
+                 back->record.backlash.c_left == record.backlash.c_left &&
+                 back->record.backlash.alpha == record.backlash.alpha &&
+                 back->record.sea_stiffness == record.sea_stiffness &&
+                 back->record.joint_zero_count == record.joint_zero_count;
+  out.message = out.uploaded ? "uploaded" : "the board holds another calibration";
   return out;
 }
 
@@ -146,82 +228,77 @@ InterfaceTruth TrueInterface(const plant::InterfaceParams& interface,
           interface.damping_Nm_s_per_rad / (1 + x * x)};
 }
 
-TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace,
+TrialOutcome RunTrial(BusBoard& bus, const SineConfig& sine, bool keep_trace,
                       bool keep_samples) {
   TrialOutcome out;
-  app::JointApp& app = board.app();
-  const app::CommandOutcome o = app.StartTrial(sine);
-  if (o.result != app::CommandOutcomeCode::kAccepted) {
-    out.faulted = true;
-    out.fault =
-        "trial refused (result " + std::to_string(static_cast<int>(o.result)) + ")";
-    return out;
-  }
-  app::AppEvent event;
-  while (app.PopEvent(&event)) {
-  }
-  const std::uint32_t delay = app.control().delay_ticks();
-  // Truth and board power by board tick, from the trial's first tick.
-  const std::uint32_t base = app.last().telemetry.tick + 1;
+  // The probe, on the board's side of the bus, from the trial's first tick (the one
+  // that takes the start): the plant's truth at the instant each tick samples, and
+  // what the protocol does not carry at the tick rate (the board's power, its aligned
+  // samples, the trace).
+  const std::uint32_t delay = bus.app().control().delay_ticks();
+  const double tick_hz = bus.tick_hz();
   std::vector<double> truth_energy, truth_power, board_power;
-  // The trial's length (two rests, the cycles) and the flush: no regrowth on the way.
   const double expected_s =
       2.0 * sine.rest_ms / 1000.0 + sine.repetitions / sine.frequency.ToDouble() + 0.2;
-  const auto expected_ticks = static_cast<std::size_t>(expected_s * board.tick_hz());
+  const auto expected_ticks = static_cast<std::size_t>(expected_s * tick_hz);
   truth_energy.reserve(expected_ticks);
   truth_power.reserve(expected_ticks);
   board_power.reserve(expected_ticks);
-  struct BoardWindow {
-    WindowSummary w;
-    InterfaceFit fit;
-  };
-  std::vector<BoardWindow> windows;
   std::vector<Angle> joints;  // the telemetry's θ_j by tick from `base`
-  host::MotionEnd trial_end(app::BoardState::kRunning);
-  std::uint32_t flush = 0;
-  const std::uint64_t limit = static_cast<std::uint64_t>(board.tick_hz()) * 600;
-  for (std::uint64_t i = 0; i < limit; ++i) {
-    const plant::Plant& plant = board.plant();
-    const double power_W = plant.interface_power_W();
-    truth_energy.push_back(plant.interface_energy_J());
-    truth_power.push_back(power_W);
-    board.Tick();
-    const TickResult& r = app.last();
+  bool recording = false;
+  std::uint32_t base = 0;
+  double energy_before = 0, power_before = 0;
+  bus.SetBeforeTick([&](SimBoard& board) {
+    energy_before = board.plant().interface_energy_J();
+    power_before = board.plant().interface_power_W();
+  });
+  bus.SetAfterTick([&](SimBoard& board) {
+    const TickResult& r = board.app().last();
+    if (!recording) {
+      if (board.app().state() != app::BoardState::kRunning) return;
+      recording = true;
+      base = r.telemetry.tick;
+    }
+    const std::size_t i = truth_power.size();
+    truth_energy.push_back(energy_before);
+    truth_power.push_back(power_before);
     // The board's power refers to the instant `delay` ticks back.
     board_power.resize(truth_power.size(), 0.0);
     if (r.telemetry.tick >= base + delay) {
       board_power[r.telemetry.tick - delay - base] = r.telemetry.power.ToDouble();
     }
     if (keep_trace && i % 20 == 0) {
-      out.trace.push_back({static_cast<double>(i) / board.tick_hz(),
+      out.trace.push_back({static_cast<double>(i) / tick_hz,
                            r.telemetry.setpoint.ToDouble(), r.telemetry.motor.ToDouble(),
                            r.telemetry.joint.ToDouble(), r.telemetry.torque.ToDouble(),
-                           r.telemetry.power.ToDouble(), power_W});
+                           r.telemetry.power.ToDouble(), power_before});
     }
-    if (keep_samples && r.telemetry.tick >= base + delay) {
-      // θ_j of the aligned instant is the telemetry's joint `delay` ticks back.
-      const std::size_t at = r.telemetry.tick - delay - base;
-      out.samples.resize(at + 1);
-      out.samples[at].velocity = r.telemetry.joint_velocity;
-      out.samples[at].torque = r.telemetry.aligned_torque;
-    }
-    if (keep_samples) joints.push_back(r.telemetry.joint);
-    while (app.PopEvent(&event)) {
-      if (event.kind == app::AppEvent::Kind::kWindow) {
-        // The main loop's solve, from the sums the tick queued beside the event.
-        InterfaceFitSums sums;
-        InterfaceFit fit;
-        if (app.PopWindowFit(event.window.start_tick, &sums))
-          fit = SolveInterfaceFit(sums);
-        windows.push_back({event.window, fit});
+    if (keep_samples) {
+      if (r.telemetry.tick >= base + delay) {
+        // θ_j of the aligned instant is the telemetry's joint `delay` ticks back.
+        const std::size_t at = r.telemetry.tick - delay - base;
+        out.samples.resize(at + 1);
+        out.samples[at].velocity = r.telemetry.joint_velocity;
+        out.samples[at].torque = r.telemetry.aligned_torque;
       }
-      if (event.kind == app::AppEvent::Kind::kFault) {
-        out.faulted = true;
-        out.fault = "fault " + host::DescribeFault(event.fault);
-      }
+      joints.push_back(r.telemetry.joint);
     }
-    if (out.faulted) break;
-    if (trial_end.Over(app.state()) && ++flush > FlushTicks(board)) break;
+  });
+
+  // The host's side, as `mjc trial`: the trial configured, started and followed by
+  // host::RunBoardTrial, its windows as they arrived over the bus.
+  protocol::TrialConfig config;
+  config.amplitude = sine.amplitude;
+  config.frequency_mHz =
+      static_cast<std::uint16_t>(std::lround(sine.frequency.ToDouble() * 1000));
+  config.repetitions = static_cast<std::uint8_t>(sine.repetitions);
+  config.rest_100ms = static_cast<std::uint8_t>(sine.rest_ms / 100);
+  const host::BoardTrial trial = host::RunBoardTrial(bus.client(), config, nullptr);
+  bus.SetBeforeTick(nullptr);
+  bus.SetAfterTick(nullptr);
+  if (!trial.completed) {
+    out.faulted = true;
+    out.fault = trial.error;
   }
   out.ticks = static_cast<std::uint32_t>(truth_power.size());
   for (std::size_t i = 0; i < out.samples.size() && i < joints.size(); ++i) {
@@ -230,19 +307,20 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace,
 
   // Windows against truth over the same ticks; power error over the cycles.
   std::size_t first = truth_power.size(), last = 0;
-  for (const BoardWindow& bw : windows) {
-    const WindowSummary& w = bw.w;
-    if (w.start_tick < base || w.end_tick - base > truth_energy.size()) continue;
+  for (const host::BoardWindow& w : trial.windows) {
+    if (!recording || w.start_tick < base || w.end_tick - base > truth_energy.size()) {
+      continue;
+    }
     const std::size_t s = w.start_tick - base, p = w.peak_tick - base,
                       e = w.end_tick - base;
     if (e >= truth_energy.size()) continue;
     WindowOutcome wo;
     wo.motion = w.motion;
     wo.repetition = w.repetition;
-    wo.load = w.loading.ToDouble();
-    wo.unload = w.unloading.ToDouble();
-    wo.net = w.net.ToDouble();
-    wo.eta = w.eta_percent.ToDouble();
+    wo.load = w.loading_J;
+    wo.unload = w.unloading_J;
+    wo.net = w.net_J();
+    wo.eta = w.eta_percent;
     wo.truth_load = truth_energy[p] - truth_energy[s];
     wo.truth_unload = truth_energy[e] - truth_energy[p];
     wo.truth_net = truth_energy[e] - truth_energy[s];
@@ -250,12 +328,11 @@ TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace,
     wo.profile = Resample(board_power, s, e);
     wo.truth_profile = Resample(truth_power, s, e);
     wo.peak_fraction = static_cast<double>(p - s) / static_cast<double>(e - s);
-    const InterfaceFit& fit = bw.fit;
-    wo.fit_valid = fit.valid();
-    wo.stiffness = fit.stiffness.ToDouble();
-    wo.damping = fit.damping.ToDouble();
-    wo.offset = fit.offset.ToDouble();
-    wo.residual_rms = fit.residual_rms.ToDouble();
+    wo.fit_valid = w.fit_valid;
+    wo.stiffness = w.stiffness_Nm_rad;
+    wo.damping = w.damping_Nms_rad;
+    wo.offset = w.offset_Nm;
+    wo.residual_rms = w.residual_rms_Nm;
     wo.first_sample = s;
     wo.end_sample = e;
     out.windows.push_back(std::move(wo));
@@ -295,7 +372,7 @@ RepeatabilityOutcome SummariseRepeatability(std::vector<TrialOutcome> trials) {
   return out;
 }
 
-RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams& subject,
+RepeatabilityOutcome RunRepeatability(BusBoard& board, const plant::PlantParams& subject,
                                       double amplitude_deg, std::uint64_t seed,
                                       const ProgressFn& progress, double progress_from,
                                       double progress_to, double frequency_hz) {
@@ -375,7 +452,7 @@ SubjectSweep SummariseSweep(const std::string& subject,
   return out;
 }
 
-SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subject,
+SubjectSweep RunAmplitudeSweep(BusBoard& board, const plant::PlantParams& subject,
                                const std::vector<double>& amplitudes_deg,
                                const ProgressFn& progress, double progress_from,
                                double progress_to, double frequency_hz) {
@@ -485,9 +562,10 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
         plant::PlantParams params = robot;
         params.interface = spec.interface;
         params.sensors.noise_seed = spec.noise_seed;
-        SimBoard board(params, config);
-        board.app().SetCalibration(record);
-        board.Tick();
+        // A board powered up at rest, given the record the sweep made as `mjc cal
+        // upload` gives it.
+        BusBoard board(params, config);
+        Upload(board, record);
         out[i] = RunTrial(board, PaperSine(spec.amplitude_deg, 5, spec.frequency_hz),
                           spec.keep_trace);
       } catch (...) {

@@ -64,6 +64,15 @@ UploadOutcome UploadCalibration(const std::string& iface, int node,
                                 const protocol::CalibrationRecord& record, int timeout_ms,
                                 std::string* why);
 
+// The same upload on a CAN link of the node's bus that has no kernel ISO-TP (the
+// simulator's in-process bus): the record segmented as ISO 15765-2 on classical frames
+// on `isotp` (first frame, the board's flow control honoured, consecutive frames), and
+// the board's answer awaited as above, by `board`'s patience (its clock, its silence).
+// `isotp` is given over to the transfer: its filters are set to the node's answers.
+UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
+                                const protocol::CalibrationRecord& record, int timeout_ms,
+                                std::string* why);
+
 struct BoardCalibration {
   // c_r, c_l, α, stiffness and joint zero count in force. The fit fields are not
   // readable over the bus and stay 0.

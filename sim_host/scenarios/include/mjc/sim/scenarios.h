@@ -4,6 +4,20 @@
 // what the unmodified firmware estimated from its sensors; "truth" numbers are the
 // plant's interface power and energy over the same windows, which the firmware never
 // sees (the paper's "simulation" column).
+//
+// One path with the lab's tools: the board (its CAN node on the plant) sits on an
+// in-process bus (sim::BusBoard, lock-stepped), and the host library drives it as
+// `mjc calibrate` and `mjc trial` do. Where each figure comes from:
+//  - over the protocol, what a lab gets from the tools: the calibration sweep's θ_m, θ_j
+//    (the board's angle telemetry, Fig. 7), the fit made from them, the record uploaded
+//    over ISO-TP and read back; every window's energies, η, ticks and attachment fit
+//    (host::RunBoardTrial's windows: Tables I–III, Figs. 9–12, attachment_fit.csv);
+//  - read on the board's side of the bus (a probe; the simulator's privilege): the
+//    plant's truth (interface energy and power at the instant each tick samples,
+//    aligned to the windows' tick ranges that arrived over the bus), and what the
+//    protocol does not carry at the tick rate: the board's power every tick (power
+//    RMSE, the windows' power profiles of Fig. 9), the aligned θ_j, θ̇_j, τ samples
+//    (TrialOutcome::samples) and Fig. 8's trace.
 #pragma once
 
 #include <cstdint>
@@ -16,7 +30,7 @@
 #include "mjc/host/report.h"
 #include "mjc/host/robot_description.h"
 #include "mjc/plant/params.h"
-#include "mjc/sim/sim_board.h"
+#include "mjc/sim/bus_board.h"
 
 namespace mjc::sim {
 
@@ -29,10 +43,11 @@ struct CalibrationOutcome {
   double true_c_left_rad = 0;
   double error_right_deg = 0;  // fitted − true
   double error_left_deg = 0;
-  bool uploaded = false;  // accepted by ToFirmwareConfig and by the board
+  bool uploaded = false;  // accepted by ToFirmwareConfig and by the board, read back
   Calibration record;     // what was uploaded (when uploaded)
   std::string message;
-  // θ_m, θ_j as the board measured them, every 10th tick (Fig. 7).
+  // θ_m, θ_j as the host received them: the board's angle telemetry (its
+  // telemetry_angles_hz, 1 kHz by default), what the fit used (Fig. 7).
   std::vector<double> motor_rad;
   std::vector<double> joint_rad;
 };
@@ -51,25 +66,27 @@ struct CalibrationJoint {
 // defaults of `mjc calibrate`).
 RampedSineConfig PaperCalibrationSweep();
 
-// Runs the increasing-amplitude sweep on the robot alone (the plant must have no
-// interface), fits c_r, c_l with NLopt on the board's own θ_m, θ_j, uploads the
-// calibration and waits for the board to accept it.
-CalibrationOutcome RunCalibration(SimBoard& board, const RampedSineConfig& sweep,
+// `mjc calibrate` over the bus: reads the record in force, runs the increasing-amplitude
+// sweep on the robot alone (the plant must have no interface) and keeps the board's
+// angle telemetry, fits c_r, c_l (and the joint's lag) with NLopt, uploads the record
+// over ISO-TP and reads it back. The board must be idle.
+CalibrationOutcome RunCalibration(BusBoard& board, const RampedSineConfig& sweep,
                                   const CalibrationJoint& joint = {});
 
 struct WindowOutcome {
   Motion motion = Motion::kFlexion;
   std::uint16_t repetition = 0;
-  // Board estimate (J, %).
+  // Board estimate (J, %), as its window frames carried it.
   double load = 0, unload = 0, net = 0, eta = 0;
   // Plant ground truth over the same ticks.
   double truth_load = 0, truth_unload = 0, truth_net = 0, truth_eta = 0;
-  // Power over the window, resampled to kProfilePoints (W), board and truth (Fig. 9).
+  // Power over the window, resampled to kProfilePoints (W), board and truth (Fig. 9):
+  // both probed on the board's side.
   std::vector<double> profile;
   std::vector<double> truth_profile;
   double peak_fraction = 0;  // where the commanded peak falls in the window, [0, 1]
-  // The board's fit of the attachment (interface_fit.h), solved from the window's sums
-  // as the main loop does.
+  // The board's fit of the attachment (interface_fit.h), as its WindowFit frames
+  // carried it.
   bool fit_valid = false;
   double stiffness = 0, damping = 0, offset = 0,
          residual_rms = 0;  // N·m/rad, N·m·s/rad, N·m
@@ -91,20 +108,23 @@ struct TraceRow {
 
 struct TrialOutcome {
   std::vector<WindowOutcome> windows;  // every completed window, in order
+  // Probed on the board's side (the protocol carries neither at the tick rate):
   std::vector<TraceRow> trace;         // every 20th tick (500 Hz), when requested
   std::vector<AlignedSample> samples;  // every aligned tick from the trial's first, when
                                        // requested
   double power_rmse_W = 0;             // board vs truth power, aligned, over the cycles
   double truth_peak_power_W = 0;       // max |truth power| over the cycles
-  std::uint32_t ticks = 0;
-  bool faulted = false;
+  std::uint32_t ticks = 0;             // from the trial's first tick to the host's end
+  bool faulted = false;                // the trial did not complete (host::BoardTrial)
   std::string fault;
 };
 
 inline constexpr int kProfilePoints = 100;
 
-// One sine trial to completion on a calibrated, idle board.
-TrialOutcome RunTrial(SimBoard& board, const SineConfig& sine, bool keep_trace,
+// One sine trial to completion on a calibrated, idle board, as `mjc trial` runs it:
+// configured (its TrialConfig: the rests in whole 100 ms), started and followed by
+// host::RunBoardTrial on the bus's client; the windows are those that arrived.
+TrialOutcome RunTrial(BusBoard& board, const SineConfig& sine, bool keep_trace,
                       bool keep_samples = false);
 
 // The attachment's true stiffness and damping as a linear fit over a sinusoid of
@@ -146,7 +166,7 @@ struct RepeatabilityOutcome {
 
 // Five trials of five repetitions at `amplitude_deg`, the interface re-donned (a seeded
 // perturbation of `subject`) before each.
-RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams& subject,
+RepeatabilityOutcome RunRepeatability(BusBoard& board, const plant::PlantParams& subject,
                                       double amplitude_deg, std::uint64_t seed,
                                       const ProgressFn& progress, double progress_from,
                                       double progress_to,
@@ -174,7 +194,7 @@ struct SubjectSweep {
 
 // The amplitude sweep for one subject: each amplitude a five-repetition trial at
 // `frequency_hz`.
-SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subject,
+SubjectSweep RunAmplitudeSweep(BusBoard& board, const plant::PlantParams& subject,
                                const std::vector<double>& amplitudes_deg,
                                const ProgressFn& progress, double progress_from,
                                double progress_to,
@@ -231,9 +251,10 @@ ModelComparison CompareWithModel(const SubjectSweep& measured,
                                  const IdentifiedAttachment& identified,
                                  const plant::InterfaceParams& model);
 
-// One trial on a board of its own: the robot with `interface` donned and its sensor
-// noise seeded by `noise_seed`, powered up at rest, given the calibration record, then
-// PaperSine(amplitude_deg, 5, frequency_hz).
+// One trial on a board and bus of its own: the robot with `interface` donned and its
+// sensor noise seeded by `noise_seed`, powered up at rest, given the calibration
+// record over the bus (ISO-TP, as `mjc cal upload`), then
+// RunTrial(PaperSine(amplitude_deg, 5, frequency_hz)).
 struct TrialSpec {
   plant::InterfaceParams interface;
   double amplitude_deg = 25.0;
