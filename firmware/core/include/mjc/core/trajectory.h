@@ -259,4 +259,21 @@ class TrajectoryGenerator {
   std::int32_t max_step_ = 0;  // Angle raw per tick, >= 1
 };
 
+// Inline, so that the tick calls the mode's step directly: through a second call the
+// tick cost 11 Cortex-M4 instructions more (tick_instructions_cm4).
+inline TrajectoryPoint TrajectoryGenerator::Step() {
+  switch (mode_) {
+    case TrajectoryMode::kSine:
+    case TrajectoryMode::kSweep:
+      return StepOscillation();
+    case TrajectoryMode::kStream:
+      return StepStream();
+    case TrajectoryMode::kHold:
+      return {position_, AngularVelocity{}, Segment::kHold, 0, false};
+    case TrajectoryMode::kIdle:
+      break;
+  }
+  return {position_, AngularVelocity{}, Segment::kIdle, repetition_, true};
+}
+
 }  // namespace mjc
