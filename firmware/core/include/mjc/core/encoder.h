@@ -259,17 +259,29 @@ constexpr bool HasEvenParity(std::uint16_t word) {
 inline constexpr std::int64_t kJointLsbPerCountQ37 = 884279719003555;
 inline constexpr int kJointScaleShift = 37;
 static_assert(kJointLsbPerCountQ37 < (std::int64_t{1} << 50));
+// The constant as high·2^32 + low with both halves in int32: c · constant is then one
+// SMULL (c · low) and one MLA (c · high into the high word), exactly, where a 64-bit
+// constant took four multiplies and adds. |c · high| <= 8192 · 205887 < 2^31.
+inline constexpr std::int32_t kJointLsbPerCountQ37High = 205887;
+inline constexpr std::int32_t kJointLsbPerCountQ37Low = 1787332003;
+static_assert((std::int64_t{kJointLsbPerCountQ37High} << 32) + kJointLsbPerCountQ37Low ==
+              kJointLsbPerCountQ37);
+static_assert(std::int64_t{8192} * kJointLsbPerCountQ37High < (std::int64_t{1} << 31));
 
 }  // namespace encoder_detail
 
 inline Angle JointCountToAngle(std::uint16_t count, const JointEncoderConfig& config) {
   // (count − offset) mod 16384 through unsigned wrap, then into [-8192, 8192).
-  const std::uint32_t delta =
-      (std::uint32_t{count} - std::uint32_t{config.zero_offset}) & kJointFrameCountMask;
-  std::int32_t c = static_cast<std::int32_t>(delta);
-  if (c >= kJointCountsPerRev / 2) c -= kJointCountsPerRev;
+  // The low 14 bits of the difference, sign-extended (one SBFX on Cortex-M4).
+  const std::uint32_t delta = std::uint32_t{count} - std::uint32_t{config.zero_offset};
+  std::int32_t c = static_cast<std::int32_t>(delta << 18) >> 18;
   if (config.direction < 0) c = -c;
-  const std::int64_t product = std::int64_t{c} * encoder_detail::kJointLsbPerCountQ37;
+  // c · kJointLsbPerCountQ37, exactly (the split above).
+  const std::int64_t product =
+      fixed_detail::WideProduct(c, encoder_detail::kJointLsbPerCountQ37Low) +
+      static_cast<std::int64_t>(static_cast<std::uint64_t>(static_cast<std::uint32_t>(
+                                    c * encoder_detail::kJointLsbPerCountQ37High))
+                                << 32);
   // |c · 2π/16384| ≤ π rad: far inside Angle's range, the cast cannot truncate.
   return Angle::FromRaw(static_cast<std::int32_t>(
       fixed_detail::RoundingShiftRight(product, encoder_detail::kJointScaleShift)));
