@@ -24,8 +24,6 @@ ControlTick::ControlTick()
       backlash_(&config_.backlash, &backlash_state_),
       inverse_(&config_.backlash, &inverse_state_),
       estimator_(window_storage_),
-      torque_delay_(std::span<std::int32_t>{}),
-      segment_delay_(std::span<std::int32_t>{}),
       windows_(config_.tick_hz),
       loop_(&config_.position, &loop_state_),
       supervisor_(&config_.supervisor, &supervisor_state_) {
@@ -83,9 +81,6 @@ ControlConfigError ControlTick::Configure(const ControlConfig& config) {
   motor_encoder_.Reconfigure();
   inverse_.Configure();
   loop_.Configure();
-  const std::size_t delay = estimator_.delay_ticks();
-  torque_delay_ = DelayLine(std::span<std::int32_t>(torque_storage_.data(), delay));
-  segment_delay_ = DelayLine(std::span<std::int32_t>(segment_storage_.data(), delay));
   windows_ = WindowTracker(config_.tick_hz);
   trajectory_ = TrajectoryGenerator(config_.tick_hz);
   Restart();
@@ -129,8 +124,11 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   if (!started_) {
     backlash_.Reset(motor, joint_);
     estimator_.Reset(joint_);
-    torque_delay_.Fill(0);
-    segment_delay_.Fill(PackSegment(Segment::kIdle, 0));
+    // Every slot of the ring in use (the estimator's delay, >= 16 ticks: Validate).
+    for (std::size_t i = 0; i < estimator_.delay_ticks(); ++i) {
+      delayed_[i] = {.torque = 0, .segment = PackSegment(Segment::kIdle, 0)};
+    }
+    delayed_next_ = 0;
     started_ = true;
   }
 
@@ -140,7 +138,9 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
 
   // 3.–4. Aligned velocity, torque and segment; power and energy (eq. 3).
   const AngularVelocity velocity = estimator_.Update(joint_);
-  const Torque aligned_torque = Torque::FromRaw(torque_delay_.Push(torque.raw()));
+  Delayed& delayed = delayed_[delayed_next_];
+  const Torque aligned_torque = Torque::FromRaw(delayed.torque);
+  delayed.torque = torque.raw();
   const Power power = Mul<Power>(aligned_torque, velocity);
   energy_.Add(power);
 
@@ -175,8 +175,9 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
 
   // 6. Trajectory and position loop.
   const TrajectoryPoint point = trajectory_.Step();
-  const std::int32_t segment_word =
-      segment_delay_.Push(PackSegment(point.segment, point.repetition));
+  const std::int32_t segment_word = delayed.segment;
+  delayed.segment = PackSegment(point.segment, point.repetition);
+  delayed_next_ = delayed_next_ + 1 == estimator_.delay_ticks() ? 0 : delayed_next_ + 1;
   const std::uint32_t aligned_tick = tick_ - estimator_.delay_ticks();
   r.window_completed = windows_.Update(
       aligned_tick, UnpackSegment(segment_word), UnpackRepetition(segment_word), power,
