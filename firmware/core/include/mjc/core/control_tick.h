@@ -151,7 +151,7 @@ class ControlTick {
   // An event, not a condition: nothing is left to clear afterwards. Other codes are
   // ignored.
   void RaiseExternalFault(Fault fault) {
-    if (IsExternalFault(fault)) external_fault_ = fault;
+    if (IsExternalFault(fault)) supervised_.external = fault;
   }
   Fault fault() const { return supervisor_.latched(); }
 
@@ -196,17 +196,16 @@ class ControlTick {
   // (telemetry, window ticks, the CAN side's schedules and timeouts).
   std::uint32_t tick_ = 0;
   bool clear_requested_ = false;
-  Fault external_fault_ = Fault::kNone;
   bool started_ = false;
   // The motor count is extended from the first tick since construction and never
   // restarted: the quadrature timer keeps counting through a reconfiguration, and
   // restarting from its raw unsigned value would read a pulley at −0.1 rad as +1.9.
   bool motor_started_ = false;
   bool armed_ = false;
-  Angle joint_;  // last good θ_j
-  std::uint16_t joint_count_ = 0;
-  Duty last_duty_;
-  Angle last_error_;  // the position loop's setpoint − θ_m behind last_duty_
+  // The supervisor's input (ISR_Step, step 5), holding between ticks the last good
+  // θ_j and its count, the duty applied and the position loop's setpoint − θ_m behind
+  // it, and an external fault raised since the last tick.
+  SupervisorInput supervised_;
 };
 
 }  // namespace mjc
