@@ -3,21 +3,6 @@
 #include <span>
 
 namespace mjc {
-namespace {
-
-// The segment and its repetition travel through one delay line as one word.
-std::int32_t PackSegment(Segment s, std::uint16_t repetition) {
-  return static_cast<std::int32_t>((static_cast<std::uint32_t>(repetition) << 8) |
-                                   static_cast<std::uint32_t>(s));
-}
-Segment UnpackSegment(std::int32_t word) {
-  return static_cast<Segment>(static_cast<std::uint32_t>(word) & 0xFFu);
-}
-std::uint16_t UnpackRepetition(std::int32_t word) {
-  return static_cast<std::uint16_t>(static_cast<std::uint32_t>(word) >> 8);
-}
-
-}  // namespace
 
 ControlTick::ControlTick()
     : motor_encoder_(&config_.motor_encoder, &motor_state_),
@@ -126,7 +111,7 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
     estimator_.Reset(supervised_.joint);
     // Every slot of the ring in use (the estimator's delay, >= 16 ticks: Validate).
     for (std::size_t i = 0; i < estimator_.delay_ticks(); ++i) {
-      delayed_[i] = {.torque = 0, .segment = PackSegment(Segment::kIdle, 0)};
+      delayed_[i] = {.torque = 0, .segment = Segment::kIdle, .repetition = 0};
     }
     delayed_next_ = 0;
     started_ = true;
@@ -173,13 +158,15 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
 
   // 6. Trajectory and position loop.
   const TrajectoryPoint point = trajectory_.Step();
-  const std::int32_t segment_word = delayed.segment;
-  delayed.segment = PackSegment(point.segment, point.repetition);
+  const Segment aligned_segment = delayed.segment;
+  const std::uint16_t aligned_repetition = delayed.repetition;
+  delayed.segment = point.segment;
+  delayed.repetition = point.repetition;
   delayed_next_ = delayed_next_ + 1 == estimator_.delay_ticks() ? 0 : delayed_next_ + 1;
   const std::uint32_t aligned_tick = tick_ - estimator_.delay_ticks();
-  r.window_completed = windows_.Update(
-      aligned_tick, UnpackSegment(segment_word), UnpackRepetition(segment_word), power,
-      aligned_torque, estimator_.centre(), velocity, &r.window, &r.window_fit);
+  r.window_completed = windows_.Update(aligned_tick, aligned_segment, aligned_repetition,
+                                       power, aligned_torque, estimator_.centre(),
+                                       velocity, &r.window, &r.window_fit);
 
   const Angle setpoint =
       config_.backlash_compensation ? inverse_.Command(point.position) : point.position;

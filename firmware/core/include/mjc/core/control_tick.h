@@ -178,8 +178,9 @@ class ControlTick {
   // The torque is taken out and put in at step 3, the segment at step 6, then the
   // index moves on.
   struct Delayed {
-    std::int32_t torque = 0;   // Torque raw
-    std::int32_t segment = 0;  // PackSegment
+    std::int32_t torque = 0;  // Torque raw
+    Segment segment = Segment::kIdle;
+    std::uint16_t repetition = 0;
   };
   std::array<Delayed, kMaxVelocityWindow / 2> delayed_{};
   std::size_t delayed_next_ = 0;  // [0, delay_ticks())
