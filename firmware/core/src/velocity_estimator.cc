@@ -80,7 +80,9 @@ AngularVelocity VelocityEstimator::Update(Angle angle) {
   const std::int32_t c = window_ / 2;
   centred_ = centred_ - s0_ + std::int64_t{c + 1} * x_old + std::int64_t{c} * x_new;
   s0_ = s0_ - x_old + x_new;
-  const std::int64_t v = MulShiftRound(centred_, multiplier_, shift_);
+  // multiplier_ is positive and below 2^30 (ScaleFor).
+  const std::int64_t v =
+      MulShiftRoundUnsigned(centred_, static_cast<std::uint32_t>(multiplier_), shift_);
   return AngularVelocity::FromRaw(fixed_detail::SaturateTo<std::int32_t>(v));
 }
 

@@ -358,17 +358,23 @@ constexpr To Divide(Fixed<U1, F1, R1> a, Fixed<U2, F2, R2> b) {
   return To::FromRaw(fixed_detail::SaturateTo<ToRep>(sq));
 }
 
-// floor(a · m / 2^shift + 1/2), computed exactly through a 96-bit
-// intermediate built from two 32×32→64 products (Cortex-M4 has SMULL/UMULL but no
-// 128-bit type). For scaling wide sums by a constant: energy readout (Σ P / f_tick),
-// the velocity estimator's 1/(D·dt). Legal shift: 32..62.
-constexpr std::int64_t MulShiftRound(std::int64_t a, std::int32_t m, int shift) {
+namespace fixed_detail {
+// MulShiftRound for a signed multiplier, or for an unsigned one below 2^31 (whose low
+// word's product is then one UMULL: a signed one needs a correction for its sign).
+template <class M>
+constexpr std::int64_t MulShiftRoundImpl(std::int64_t a, M m, int shift) {
   // a = hi·2^32 + lo with hi signed and 0 <= lo < 2^32.
   // hi held in 32 bits: a 32×32 multiply (SMULL), not a 64×64 one.
   const auto hi = static_cast<std::int32_t>(a >> 32);
   const auto lo = static_cast<std::uint32_t>(static_cast<std::uint64_t>(a) & 0xFFFFFFFFu);
-  const std::int64_t hi_product = fixed_detail::WideProduct(hi, m);   // |hi·m| < 2^62
-  const std::int64_t lo_product = static_cast<std::int64_t>(lo) * m;  // |lo·m| < 2^63
+  // |hi·m| < 2^62 and |lo·m| < 2^63.
+  const std::int64_t hi_product = WideProduct(hi, static_cast<std::int32_t>(m));
+  std::int64_t lo_product = 0;
+  if constexpr (std::is_unsigned_v<M>) {
+    lo_product = static_cast<std::int64_t>(std::uint64_t{lo} * m);
+  } else {
+    lo_product = static_cast<std::int64_t>(lo) * m;
+  }
   // a·m = hi_product·2^32 + lo_product = upper·2^32 + lower, 0 <= lower < 2^32.
   const std::int64_t upper = hi_product + (lo_product >> 32);
   const auto lower =
@@ -391,6 +397,22 @@ constexpr std::int64_t MulShiftRound(std::int64_t a, std::int32_t m, int shift) 
   const std::int64_t result_hi = rounded_hi >> s;
   return static_cast<std::int64_t>((static_cast<std::uint64_t>(result_hi) << 32) |
                                    result_lo);
+}
+
+}  // namespace fixed_detail
+
+// floor(a · m / 2^shift + 1/2), computed exactly through a 96-bit
+// intermediate built from two 32×32→64 products (Cortex-M4 has SMULL/UMULL but no
+// 128-bit type). For scaling wide sums by a constant: energy readout (Σ P / f_tick),
+// the velocity estimator's 1/(D·dt). Legal shift: 32..62.
+constexpr std::int64_t MulShiftRound(std::int64_t a, std::int32_t m, int shift) {
+  return fixed_detail::MulShiftRoundImpl(a, m, shift);
+}
+
+// MulShiftRound for a multiplier known to lie in [0, 2^31) (the velocity estimator's
+// scale): the same value, two Cortex-M4 instructions fewer.
+constexpr std::int64_t MulShiftRoundUnsigned(std::int64_t a, std::uint32_t m, int shift) {
+  return fixed_detail::MulShiftRoundImpl(a, m, shift);
 }
 
 // |x|, saturating (Abs(Min()) is Max()).
