@@ -50,9 +50,11 @@ namespace mjc {
 // integer. Held as value = top·2^64 + sum, sum an int64 that each product (|v| ≤ 2^62)
 // is added to with wrap-around, and top the count of its signed overflows: +1 when the
 // true sum passed INT64_MAX, −1 when it passed INT64_MIN. On the M4 that is SMULL, an
-// ADDS/ADCS pair whose V flag is the overflow, and a branch not taken but once in
-// 2^62/|v| ticks: the tick's six products cost 48 instructions fewer than as two
-// 64-bit sums of the product's words (tick_instructions_cm4). |value| < 2^94, so top
+// ADDS/ADCS pair whose V flag is the overflow, and a branch taken only on an overflow
+// (at most once in 2^63/|v| products in one direction: rare for a joint's angles and
+// torques, every other tick for full-scale ones): the tick's six products cost 24
+// instructions fewer than as two 64-bit sums of the product's words
+// (tick_instructions_cm4). |value| < 2^94, so top
 // stays within ±2^30.
 class Wide96 {
  public:
