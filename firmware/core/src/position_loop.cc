@@ -69,7 +69,7 @@ Duty PositionLoop::Update(Angle setpoint, AngularVelocity setpoint_velocity,
   status_.saturated = total > limit || total < -limit;
   // |clamped| <= limit = max_duty·2^9 < 2^24 (a Duty is below 1), so FixedCast's
   // rounding fits 32 bits, floor(x/2^9 + 1/2) = (x + 2^8) >> 9, and its result is at
-  // most max_duty's raw value: its saturation cannot act (on Cortex-M4 it cost 11
+  // most max_duty's raw value: its saturation cannot act (on Cortex-M4 it cost 10
   // instructions a tick).
   const DutySum clamped = Clamp(total, -limit, limit);
   constexpr int kShift = DutySum::kFracBits - Duty::kFracBits;
