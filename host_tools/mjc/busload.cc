@@ -21,9 +21,17 @@ void AddBusload(CLI::App& app) {
   cmd->add_option("--data-kbps", data_kbps, "CAN FD data bit rate")
       ->check(CLI::Range(10.0, 8000.0))
       ->capture_default_str();
+  static bool figures = false;
+  cmd->add_flag("--figures", figures,
+                "Print ./bench's figures instead (8 boards, 1 and 5 Mbit/s), one "
+                "'name: value unit' line each")
+      ->excludes("--boards", "--nominal-kbps", "--data-kbps");
   cmd->callback([] {
-    std::fputs(host::BusLoadReport(boards, nominal_kbps * 1e3, data_kbps * 1e3).c_str(),
-               stdout);
+    std::fputs(
+        figures
+            ? host::BusLoadFigures().c_str()
+            : host::BusLoadReport(boards, nominal_kbps * 1e3, data_kbps * 1e3).c_str(),
+        stdout);
   });
 }
 

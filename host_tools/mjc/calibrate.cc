@@ -81,9 +81,7 @@ void AddCalibrate(CLI::App& app) {
   cmd->add_option("--amplitude-deg", amplitude_deg, "Final sweep amplitude")
       ->check(InRange(1.0, 90.0, "°"))
       ->capture_default_str();
-  cmd->add_option("--frequency-hz", frequency_hz, "Sweep frequency")
-      ->check(InRange(kMinFrequencyHz, kMaxFrequencyHz, "Hz"))
-      ->capture_default_str();
+  AddFrequencyOption(cmd, &frequency_hz, "Sweep frequency");
   cmd->add_option("--cycles", cycles, "Sweep cycles")
       ->check(InRange(2, 255))
       ->capture_default_str();
@@ -154,13 +152,9 @@ void AddCalibrate(CLI::App& app) {
       // Heartbeats flow while the sweep runs: if this tool dies, the board stops it.
       host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
                               host::HostHeartbeats::kSend);
-      SayBusOff(board, "mjc calibrate", iface);
       // Ctrl-C (or SIGTERM, SIGHUP) ends the sweep: the board is stopped and the samples
-      // that arrived are saved.
-      const std::atomic<bool>& interrupted = StopOnSignals();
-      board.SetInterrupt(&interrupted);
-      estop =
-          StartEstop(estop_options, iface, "mjc calibrate", board.session(), &StopFlag());
+      // that arrived are saved. So does the emergency stop.
+      estop = GuardMotion(board, "mjc calibrate", iface, estop_options);
       const std::string who = "node " + std::to_string(node);
       std::string why;
       // Who it is (one board, its build), in run.json before anything moves.

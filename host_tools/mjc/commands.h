@@ -140,6 +140,15 @@ CLI::Option* AddNodeOption(CLI::App* cmd, T* node, const char* help = "Node id")
       ->capture_default_str();
 }
 
+// --frequency-hz of a trial or sweep, within what the board accepts (kMinFrequencyHz,
+// kMaxFrequencyHz).
+inline CLI::Option* AddFrequencyOption(CLI::App* cmd, double* frequency_hz,
+                                       const char* help) {
+  return cmd->add_option("--frequency-hz", *frequency_hz, help)
+      ->check(InRange(kMinFrequencyHz, kMaxFrequencyHz, "Hz"))
+      ->capture_default_str();
+}
+
 // --out and --force of a command that writes a run's folder (see host::OutputFolder).
 struct OutputOptions {
   std::string out;
@@ -349,6 +358,18 @@ inline std::unique_ptr<host::EmergencyStopThread> StartEstop(const EstopOptions&
   config.session = session;
   return std::make_unique<host::EmergencyStopThread>(std::move(line), OpenLink(iface),
                                                      config, raise);
+}
+
+// What a command that moves a board sets up once its client is open: a bus-off said at
+// once, its waits ended by SIGINT, SIGTERM or SIGHUP (StopOnSignals), and the
+// emergency-stop watch on options.line (StartEstop), whose StopAll ends them too.
+// Returns the watch (nullptr without a line); StopFlag() tells whether they ended.
+inline std::unique_ptr<host::EmergencyStopThread> GuardMotion(
+    host::BoardClient& board, const std::string& command, const std::string& iface,
+    const EstopOptions& options) {
+  SayBusOff(board, command, iface);
+  board.SetInterrupt(&StopOnSignals());
+  return StartEstop(options, iface, command, board.session(), &StopFlag());
 }
 
 // "emergency stop on gpiochip0:estop: every board was told to stop", or the watch's

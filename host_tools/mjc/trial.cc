@@ -80,9 +80,7 @@ void AddTrial(CLI::App& app) {
   cmd->add_option("--amplitudes", amplitudes, "Amplitude protocol: amplitudes (deg)")
       ->check(InRange(1.0, 90.0, "°"))
       ->capture_default_str();
-  cmd->add_option("--frequency-hz", frequency_hz, "Sine frequency")
-      ->check(InRange(kMinFrequencyHz, kMaxFrequencyHz, "Hz"))
-      ->capture_default_str();
+  AddFrequencyOption(cmd, &frequency_hz, "Sine frequency");
   cmd->add_option("--rest-s", rest_s, "Rest before and after each trial")
       ->check(InRange(0.0, 25.0, "s"))
       ->capture_default_str();
@@ -180,12 +178,10 @@ void AddTrial(CLI::App& app) {
       // --pause prompt waits with the board at rest, where their absence is harmless.
       host::BoardClient board(link.get(), static_cast<std::uint8_t>(node),
                               host::HostHeartbeats::kSend);
-      SayBusOff(board, "mjc trial", iface);
       // Ctrl-C (or SIGTERM, SIGHUP) ends the waits: the motion is stopped and every
       // window that arrived is kept. So does the emergency stop (after its StopAll).
-      const std::atomic<bool>& interrupted = StopOnSignals();
-      board.SetInterrupt(&interrupted);
-      estop = StartEstop(estop_options, iface, "mjc trial", board.session(), &StopFlag());
+      estop = GuardMotion(board, "mjc trial", iface, estop_options);
+      const std::atomic<bool>& interrupted = StopFlag();
       // Each window start an edge, set the moment its frame is handled.
       if (sync) {
         board.OnWindowStart([&](const protocol::WindowStart& w) {

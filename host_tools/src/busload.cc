@@ -140,4 +140,18 @@ std::string BusLoadReport(int boards, double nominal_bps, double data_bps) {
   return out + line;
 }
 
+std::string BusLoadFigures() {
+  constexpr int kBoards = 8;
+  const protocol::TelemetryRates defaults;
+  const BusTiming fd{true, 1e6, 5e6};
+  const BusTiming classic{false, 1e6, 1e6};
+  char line[200];
+  std::snprintf(line, sizeof line, "busload_8x1khz_fd_pct: %.2f %%\n",
+                100.0 * ComputeBusLoad(defaults, kBoards, fd).total_fraction);
+  std::string out = line;
+  std::snprintf(line, sizeof line, "classic_1m_max_telemetry_hz: %.0f Hz\n",
+                MaxTelemetryHz(defaults, kBoards, classic, 0.5));
+  return out + line;
+}
+
 }  // namespace mjc::host

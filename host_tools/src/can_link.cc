@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cstddef>
 #include <cstring>
 #include <thread>
 
@@ -59,6 +60,14 @@ int OpenSocket(int type, int protocol, const std::string& interface, std::string
   return fd;
 }
 
+// Gives up on a socket being set up: says what failed, with errno, closes it, and
+// returns the null link Open returns.
+std::nullptr_t CloseFailed(int fd, const std::string& what, std::string* why) {
+  Say(why, Errno(what));
+  ::close(fd);
+  return nullptr;
+}
+
 }  // namespace
 
 // --- SocketCAN raw ------------------------------------------------------------------
@@ -74,9 +83,7 @@ std::unique_ptr<SocketCanLink> SocketCanLink::Open(const std::string& interface,
       ::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors) < 0 ||
       ::setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof on) < 0 ||
       ::setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on) < 0) {
-    Say(why, Errno("cannot set up the socket on '" + interface + "'"));
-    ::close(fd);
-    return nullptr;
+    return CloseFailed(fd, "cannot set up the socket on '" + interface + "'", why);
   }
   // The smallest send buffer the kernel allows (it rounds 0 up to a few frames): a
   // socket that has that much queued gets EAGAIN and poll() reports POLLOUT when the
@@ -84,9 +91,7 @@ std::unique_ptr<SocketCanLink> SocketCanLink::Open(const std::string& interface,
   // fill and drop frames with ENOBUFS, which poll() cannot wait for (see DoSend).
   const int send_buffer = 0;
   if (::setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &send_buffer, sizeof send_buffer) < 0) {
-    Say(why, Errno("cannot set the send buffer on '" + interface + "'"));
-    ::close(fd);
-    return nullptr;
+    return CloseFailed(fd, "cannot set the send buffer on '" + interface + "'", why);
   }
   // Eight boards at full rate are ~9,000 frames/s: 4 MB holds seconds of them while
   // the tool is busy (the kernel default, ~200 KB, holds about 0.2 s). Without
@@ -100,9 +105,7 @@ std::unique_ptr<SocketCanLink> SocketCanLink::Open(const std::string& interface,
   address.can_family = AF_CAN;
   address.can_ifindex = static_cast<int>(index);
   if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) < 0) {
-    Say(why, Errno("cannot bind to '" + interface + "'"));
-    ::close(fd);
-    return nullptr;
+    return CloseFailed(fd, "cannot bind to '" + interface + "'", why);
   }
   return std::unique_ptr<SocketCanLink>(new SocketCanLink(fd, interface));
 }
@@ -306,9 +309,8 @@ std::unique_ptr<IsoTpLink> IsoTpLink::Open(const std::string& interface,
   address.can_addr.tp.tx_id = tx_id & CAN_SFF_MASK;
   address.can_addr.tp.rx_id = rx_id & CAN_SFF_MASK;
   if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) < 0) {
-    Say(why, Errno("cannot bind ISO-TP on '" + interface + "' (is can-isotp loaded?)"));
-    ::close(fd);
-    return nullptr;
+    return CloseFailed(
+        fd, "cannot bind ISO-TP on '" + interface + "' (is can-isotp loaded?)", why);
   }
   return std::unique_ptr<IsoTpLink>(new IsoTpLink(fd, interface));
 }

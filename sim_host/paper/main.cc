@@ -31,6 +31,7 @@ struct Options {
   // a step too long for a mode the sensors follow.
   double max_step_us = 100.0;
   int threads = 0;  // 0: one per core
+  double frequency_hz = sim::kPaperFrequencyHz;
 };
 
 plant::PlantParams Load(const std::string& name_or_path) {
@@ -82,9 +83,21 @@ int main(int argc, char** argv) {
          "depend on it")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
+  cli.add_option("--frequency-hz", opt.frequency_hz,
+                 "Drive frequency of the trials, Hz (0.25 to 2; the paper's is 0.5). The "
+                 "calibration sweep keeps its own 0.5 Hz")
+      ->capture_default_str();
   CLI11_PARSE(cli, argc, argv);
+  // Checked here rather than by CLI11, for one line naming the range; NaN fails too.
+  if (!(opt.frequency_hz >= sim::kMinDriveFrequencyHz &&
+        opt.frequency_hz <= sim::kMaxDriveFrequencyHz)) {
+    std::fprintf(
+        stderr, "mjc-paper: --frequency-hz %g is outside the checked range %g to %g Hz\n",
+        opt.frequency_hz, sim::kMinDriveFrequencyHz, sim::kMaxDriveFrequencyHz);
+    return 2;
+  }
 
-  paper::Report report(opt.out, opt.quiet);
+  paper::Report report(opt.out, opt.quiet, opt.frequency_hz);
   try {
     plant::PlantParams robot = Load(opt.robot);
     std::vector<plant::PlantParams> subjects;
@@ -101,7 +114,7 @@ int main(int argc, char** argv) {
       config.velocity_window = static_cast<std::uint16_t>(opt.velocity_window);
     }
     return paper::Run(opt.scenario, robot, subjects, config, opt.seed, opt.threads,
-                      report);
+                      opt.frequency_hz, report);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mjc-paper: %s\n", e.what());
     return 1;

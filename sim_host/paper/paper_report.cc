@@ -56,7 +56,8 @@ double WindowEnergyErrorPct(const sim::WindowOutcome& w) {
 
 }  // namespace
 
-Report::Report(fs::path out, bool quiet) : out_(std::move(out)), quiet_(quiet) {
+Report::Report(fs::path out, bool quiet, double frequency_hz)
+    : out_(std::move(out)), quiet_(quiet), frequency_hz_(frequency_hz) {
   fs::create_directories(out_);
 }
 
@@ -144,8 +145,8 @@ void Report::Trial(const sim::TrialOutcome& trial, double amplitude_deg) {
   csv.Write(out_ / "trial_timeseries.csv");
   Figure("fig8_trial",
          "set datafile separator ','\nset multiplot layout 3,1 title 'One trial: " +
-             Format("%.0f", amplitude_deg) +
-             "° at 0.5 Hz, five repetitions'\nd = 180/pi\nset ylabel 'angle (deg)'\n"
+             Format("%.0f", amplitude_deg) + "° at " + Format("%g", frequency_hz_) +
+             " Hz, five repetitions'\nd = 180/pi\nset ylabel 'angle (deg)'\n"
              "plot 'trial_timeseries.csv' every ::1 using 1:($3*d) with lines title "
              "'motor', "
              "'' every ::1 using 1:($4*d) with lines title 'joint'\n"
@@ -162,8 +163,8 @@ void Report::Trial(const sim::TrialOutcome& trial, double amplitude_deg) {
 
 void Report::Repeatability(const sim::RepeatabilityOutcome& rep, double amplitude_deg) {
   Print("\n## Table I: energy loss η for the repeatability study (" +
-        Format("%.0f", amplitude_deg) +
-        "°, 0.5 Hz, 5 trials × middle 3 of 5 flexions, re-donned)\n\n");
+        Format("%.0f", amplitude_deg) + "°, " + Format("%g", frequency_hz_) +
+        " Hz, 5 trials × middle 3 of 5 flexions, re-donned)\n\n");
   Print("| | board mean | board std | truth mean | truth std |\n|---|---|---|---|---|\n");
   CsvTable csv({"trial", "repetition", "eta_pct", "truth_eta_pct", "load_J",
                 "truth_load_J", "unload_J", "truth_unload_J"});
@@ -231,6 +232,10 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
       "\n## Amplitude sweep (Figs. 10–12): work per flexion (mJ), mean ± SE of the "
       "middle "
       "three of five; board estimate vs plant truth\n");
+  if (frequency_hz_ != sim::kPaperFrequencyHz) {
+    Print("\ndrive frequency " + Format("%g", frequency_hz_) + " Hz (the paper's is " +
+          Format("%g", sim::kPaperFrequencyHz) + " Hz)\n");
+  }
   CsvTable csv({"subject", "amplitude_deg", "load_mJ", "load_se_mJ", "truth_load_mJ",
                 "unload_mJ", "unload_se_mJ", "truth_unload_mJ", "net_mJ", "net_se_mJ",
                 "truth_net_mJ", "eta_pct", "truth_eta_pct", "power_rmse_pct_peak"});
@@ -368,9 +373,20 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
                        {"window_energy_err_pct", worst_energy},
                        {"eta_err_pt", worst_eta}};
 
-  const char* quantities[3][3] = {{"fig10_loading", "Loading work", "3:4:5"},
-                                  {"fig11_unloading", "Unloading work", "6:7:8"},
-                                  {"fig12_net", "Net work", "9:10:11"}};
+  work_subjects_.clear();
+  for (const auto& sw : sweeps) work_subjects_.push_back(sw.subject);
+  work_figures_pending_ = true;
+}
+
+// Figs. 10–12: the board's work per flexion against amplitude with its SE, the plant's
+// truth, and, once Model has run, the model's prediction as the paper's dotted lines.
+void Report::WorkFigures(bool with_model) {
+  work_figures_pending_ = false;
+  // Columns of amplitude_sweep.csv (mean, SE, truth) and of model_vs_board.csv (the
+  // prediction).
+  const char* quantities[3][4] = {{"fig10_loading", "Loading work", "3:4:5", "5"},
+                                  {"fig11_unloading", "Unloading work", "6:7:8", "8"},
+                                  {"fig12_net", "Net work", "9:10:11", "11"}};
   for (const auto& q : quantities) {
     const std::string cols = q[2];
     const std::string mean = cols.substr(0, cols.find(':'));
@@ -378,14 +394,21 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
     const std::string se = rest.substr(0, rest.find(':'));
     const std::string truth = rest.substr(rest.find(':') + 1);
     std::string plot = "plot ";
-    for (std::size_t i = 0; i < sweeps.size(); ++i) {
-      const std::string sel = "(strcol(1) eq '" + sweeps[i].subject + "' ? $";
+    for (std::size_t i = 0; i < work_subjects_.size(); ++i) {
+      const std::string& subject = work_subjects_[i];
+      const std::string sel = "(strcol(1) eq '" + subject + "' ? $";
+      const std::string colour = std::to_string(i + 1);
       plot += std::string(i ? ", " : "") +
               "'amplitude_sweep.csv' every ::1 using 2:" + sel + mean + " : 1/0):" + sel +
-              se + " : 1/0) with yerrorlines lw 2 lc " + std::to_string(i + 1) +
-              " title '" + sweeps[i].subject + " board', '' every ::1 using 2:" + sel +
-              truth + " : 1/0) with points pt 6 ps 1.5 lc " + std::to_string(i + 1) +
-              " title '" + sweeps[i].subject + " truth'";
+              se + " : 1/0) with yerrorlines lw 2 lc " + colour + " title '" + subject +
+              " board', '' every ::1 using 2:" + sel + truth +
+              " : 1/0) with points pt 6 ps 1.5 lc " + colour + " title '" + subject +
+              " truth'";
+      if (with_model) {
+        plot += ", 'model_vs_board.csv' every ::1 using 2:" + sel + q[3] +
+                " : 1/0) with lines dt 2 lw 2 lc " + colour + " title '" + subject +
+                " model'";
+      }
     }
     Figure(q[0], std::string("set title '") + q[1] +
                      " per flexion vs amplitude'\nset xlabel 'amplitude (deg)'\n"
@@ -394,8 +417,94 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
   }
 }
 
+void Report::Model(const std::vector<sim::ModelComparison>& comparisons) {
+  Print(
+      "\n## Experiment against model (Figs. 10–12, Tables II–III): the board's "
+      "measurement vs the simulator's prediction with the attachment the board "
+      "identified (Kelvin–Voigt, mean of its fits at ≥ 11°); work per flexion (mJ)\n");
+  CsvTable csv({"subject", "amplitude_deg", "load_mJ", "load_se_mJ", "model_load_mJ",
+                "unload_mJ", "unload_se_mJ", "model_unload_mJ", "net_mJ", "net_se_mJ",
+                "model_net_mJ"});
+  nlohmann::json subjects = nlohmann::json::array();
+  for (const auto& c : comparisons) {
+    Print("\n### " + c.subject +
+          ": model k = " + Format("%.3f", c.model.stiffness_Nm_per_rad) +
+          " N·m/rad, b = " + Format("%.4f", c.model.damping_Nm_s_per_rad) +
+          " N·m·s/rad, τ_0 = " + Format("%+.4f", c.model.preload_Nm) + " N·m (" +
+          std::to_string(c.identified.stiffness.n) +
+          " fits)\n\n| amplitude | loading board | loading model | unloading board | "
+          "unloading model | net board | net model |\n|---|---|---|---|---|---|---|\n");
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& p : c.points) {
+      Print("| " + Format("%.0f°", p.amplitude_deg) + " | " +
+            PlusMinus(p.load, kMilli, "%.3f", true) + " | " +
+            Format("%.3f", p.model_load * kMilli) + " | " +
+            PlusMinus(p.unload, kMilli, "%.3f", true) + " | " +
+            Format("%.3f", p.model_unload * kMilli) + " | " +
+            PlusMinus(p.net, kMilli, "%.3f", true) + " | " +
+            Format("%.3f", p.model_net * kMilli) + " |\n");
+      csv.AddRow(
+          {c.subject, CsvTable::Number(p.amplitude_deg),
+           CsvTable::Number(p.load.mean * kMilli), CsvTable::Number(p.load.se * kMilli),
+           CsvTable::Number(p.model_load * kMilli),
+           CsvTable::Number(p.unload.mean * kMilli),
+           CsvTable::Number(p.unload.se * kMilli),
+           CsvTable::Number(p.model_unload * kMilli),
+           CsvTable::Number(p.net.mean * kMilli), CsvTable::Number(p.net.se * kMilli),
+           CsvTable::Number(p.model_net * kMilli)});
+      points.push_back({{"amplitude_deg", p.amplitude_deg},
+                        {"load_J", StatsJson(p.load)},
+                        {"unload_J", StatsJson(p.unload)},
+                        {"net_J", StatsJson(p.net)},
+                        {"model_load_J", p.model_load},
+                        {"model_unload_J", p.model_unload},
+                        {"model_net_J", p.model_net}});
+    }
+    subjects.push_back(
+        {{"subject", c.subject},
+         {"model",
+          {{"stiffness_Nm_rad", c.model.stiffness_Nm_per_rad},
+           {"damping_Nms_rad", c.model.damping_Nm_s_per_rad},
+           {"preload_Nm", c.model.preload_Nm}}},
+         {"identified",
+          {{"stiffness_Nm_rad", StatsJson(c.identified.stiffness)},
+           {"damping_Nms_rad", StatsJson(c.identified.damping)},
+           {"offset_Nm", StatsJson(c.identified.offset)}}},
+         {"points", points},
+         {"rmse_J",
+          {{"load", c.rmse_load}, {"unload", c.rmse_unload}, {"net", c.rmse_net}}},
+         {"nrmse_pct",
+          {{"load", c.nrmse_load}, {"unload", c.nrmse_unload}, {"net", c.nrmse_net}}}});
+  }
+  csv.Write(out_ / "model_vs_board.csv");
+
+  Print(
+      "\n## Tables II–III: experiment (board) vs simulation (model) across amplitudes; "
+      "NRMSE normalised to the prediction's range\n\n"
+      "| subject | RMSE loading (mJ) | RMSE unloading (mJ) | RMSE net (mJ) | NRMSE "
+      "loading | NRMSE unloading | NRMSE net |\n|---|---|---|---|---|---|---|\n");
+  CsvTable rmse({"subject", "rmse_load_mJ", "rmse_unload_mJ", "rmse_net_mJ",
+                 "nrmse_load_pct", "nrmse_unload_pct", "nrmse_net_pct"});
+  for (const auto& c : comparisons) {
+    Print("| " + c.subject + " | " + Format("%.4f", c.rmse_load * kMilli) + " | " +
+          Format("%.4f", c.rmse_unload * kMilli) + " | " +
+          Format("%.4f", c.rmse_net * kMilli) + " | " + Format("%.2f%%", c.nrmse_load) +
+          " | " + Format("%.2f%%", c.nrmse_unload) + " | " +
+          Format("%.2f%%", c.nrmse_net) + " |\n");
+    rmse.AddRow({c.subject, CsvTable::Number(c.rmse_load * kMilli),
+                 CsvTable::Number(c.rmse_unload * kMilli),
+                 CsvTable::Number(c.rmse_net * kMilli), CsvTable::Number(c.nrmse_load),
+                 CsvTable::Number(c.nrmse_unload), CsvTable::Number(c.nrmse_net)});
+  }
+  rmse.Write(out_ / "model_rmse.csv");
+  json_["model_vs_board"] = subjects;
+  WorkFigures(true);
+}
+
 int Report::Finish(double wall_s, double simulated_s) {
-  json_["run"] = {{"wall_s", wall_s},
+  if (work_figures_pending_) WorkFigures(false);
+  json_["run"] = {{"frequency_hz", frequency_hz_},
+                  {"wall_s", wall_s},
                   {"simulated_s", simulated_s},
                   {"realtime_factor", wall_s > 0 ? simulated_s / wall_s : 0.0},
                   {"figures", figures_}};
@@ -413,7 +522,7 @@ int Report::Finish(double wall_s, double simulated_s) {
 
 int Run(const std::string& scenario, const plant::PlantParams& robot,
         const std::vector<plant::PlantParams>& subjects, const ControlConfig& config,
-        std::uint64_t seed, int threads, Report& report) {
+        std::uint64_t seed, int threads, double frequency_hz, Report& report) {
   const auto start = std::chrono::steady_clock::now();
   sim::SimBoard board(robot, config);
   if (board.app().control().config().velocity_window != config.velocity_window) {
@@ -444,10 +553,12 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
   std::vector<sim::TrialSpec> specs;
   if (repeatability) {
     const plant::PlantParams& first = subjects.front();
-    specs.push_back({first.interface, amplitude, true, 0, "one trial: " + first.name});
+    specs.push_back(
+        {first.interface, amplitude, true, 0, "one trial: " + first.name, frequency_hz});
     for (std::uint64_t k = 0; k < 5; ++k) {
       specs.push_back({plant::Redon(first, seed + k).interface, amplitude, false, 0,
-                       "repeatability: trial " + std::to_string(k + 1) + "/5"});
+                       "repeatability: trial " + std::to_string(k + 1) + "/5",
+                       frequency_hz});
     }
   }
   const std::size_t sweep_from = specs.size();
@@ -456,14 +567,20 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
       for (const double a : amplitudes) {
         specs.push_back({subject.interface, a, false, 0,
                          "amplitude sweep: " + subject.name + " " +
-                             std::to_string(static_cast<int>(a)) + "°"});
+                             std::to_string(static_cast<int>(a)) + "°",
+                         frequency_hz});
       }
     }
   }
   for (std::size_t i = 0; i < specs.size(); ++i) specs[i].noise_seed = RunSeed(seed, i);
-  const std::vector<sim::TrialOutcome> trials = sim::RunTrials(
-      robot, config, cal.record, specs, threads,
-      [&report](const std::string& s, double f) { report.Progress(s, 0.1 + 0.9 * f); });
+  // The model's sweep follows the measured one (it needs its fits): a quarter of the
+  // progress bar.
+  const double measured_to = amplitude_sweep ? 0.75 : 1.0;
+  const std::vector<sim::TrialOutcome> trials =
+      sim::RunTrials(robot, config, cal.record, specs, threads,
+                     [&report, measured_to](const std::string& s, double f) {
+                       report.Progress(s, 0.1 + (measured_to - 0.1) * f);
+                     });
 
   // Reported in the order of the list, whatever the order the trials ended in.
   double simulated_s = board.plant().time();
@@ -483,9 +600,44 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
       for (const double a : amplitudes)
         points.push_back(sim::SummarisePoint(a, trials[next++]));
       sweeps.push_back(sim::SummariseSweep(subject.name, std::move(points)));
-      sweeps.back().truth = sim::TrueInterface(subject.interface, sim::kPaperFrequencyHz);
+      sweeps.back().truth = sim::TrueInterface(subject.interface, frequency_hz);
+      sweeps.back().frequency_hz = frequency_hz;
     }
     report.Amplitude(sweeps);
+
+    // The prediction: the same sweep on each subject's identified attachment, every
+    // trial on a board of its own with a noise sequence of its own.
+    std::vector<sim::IdentifiedAttachment> identified;
+    std::vector<sim::TrialSpec> model_specs;
+    for (const sim::SubjectSweep& s : sweeps) {
+      identified.push_back(sim::IdentifyAttachment(s));
+      const plant::InterfaceParams model = sim::ModelInterface(identified.back(), robot);
+      for (const double a : amplitudes) {
+        model_specs.push_back(
+            {model, a, false, RunSeed(seed, specs.size() + model_specs.size()),
+             "model: " + s.subject + " " + std::to_string(static_cast<int>(a)) + "°",
+             frequency_hz});
+      }
+    }
+    const std::vector<sim::TrialOutcome> predicted =
+        sim::RunTrials(robot, config, cal.record, model_specs, threads,
+                       [&report, measured_to](const std::string& s, double f) {
+                         report.Progress(s, measured_to + (1.0 - measured_to) * f);
+                       });
+    std::vector<sim::ModelComparison> comparisons;
+    next = 0;
+    for (std::size_t i = 0; i < sweeps.size(); ++i) {
+      std::vector<sim::AmplitudePoint> points;
+      for (const double a : amplitudes)
+        points.push_back(sim::SummarisePoint(a, predicted[next++]));
+      comparisons.push_back(sim::CompareWithModel(
+          sweeps[i], sim::SummariseSweep(sweeps[i].subject, std::move(points)),
+          identified[i], model_specs[i * amplitudes.size()].interface));
+    }
+    for (const sim::TrialOutcome& t : predicted) {
+      simulated_s += (t.ticks + 1.0) / board.tick_hz();
+    }
+    report.Model(comparisons);
   }
   report.Progress("done", 1.0);
   const double wall =

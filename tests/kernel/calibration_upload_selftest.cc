@@ -2,7 +2,7 @@
 // on a raw SocketCAN socket, ticking at 10 kHz) receives a calibration record sent by the
 // Linux kernel's own ISO-TP implementation (the host's IsoTpLink) — an ISO-TP stack we
 // did not write — and answers [result, detail]. A corrupted record is refused with its
-// reason and the old calibration stays. Prints "cal_upload_ms: N" (end to end: send,
+// reason and the old calibration stays. Prints "cal_upload_ms: N ms" (end to end: send,
 // board applies, reply received) and "N passed, N failed".
 #include <atomic>
 #include <chrono>
@@ -14,17 +14,14 @@
 #include "mjc/host/can_link.h"
 #include "mjc/protocol/calibration_record.h"
 #include "mjc/sim/link_can_port.h"
+#include "self_check.h"
 
 namespace {
 
 using namespace mjc;
 using namespace mjc::protocol;
 
-int g_passed = 0, g_failed = 0;
-void Check(bool ok, const std::string& what) {
-  std::printf("%s %s\n", ok ? "PASS" : "FAIL", what.c_str());
-  (ok ? g_passed : g_failed)++;
-}
+kernel_test::SelfCheck check;
 
 struct QuietIo {
   Sample ISR_Read() {
@@ -65,7 +62,7 @@ int main() {
   const std::uint32_t from_board =
       MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), 1);
   auto host = host::IsoTpLink::Open("vcan0", to_board, from_board, &why);
-  Check(host != nullptr, "host ISO-TP socket: " + why);
+  check(host != nullptr, "host ISO-TP socket: " + why);
   if (host) {
     CalibrationRecord record;
     record.backlash.c_right = Angle::FromDouble(0.0195);
@@ -79,20 +76,20 @@ int main() {
     // accepted record once its tick has applied it.
     constexpr int kCapMs = 300000;
     const auto t0 = std::chrono::steady_clock::now();
-    Check(host->Send(bytes, &why), "upload 48-byte record: " + why);
+    check(host->Send(bytes, &why), "upload 48-byte record: " + why);
     auto reply = host->Receive(kCapMs, &why);
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
             .count();
-    Check(reply && reply->size() == 2 && (*reply)[0] == 0 && (*reply)[1] == 0,
+    check(reply && reply->size() == 2 && (*reply)[0] == 0 && (*reply)[1] == 0,
           "board answers [accepted, 0]" + (reply ? std::string() : ": " + why));
-    std::printf("cal_upload_ms: %.1f\n", ms);
+    std::printf("cal_upload_ms: %.1f ms\n", ms);
 
     auto bad = bytes;
     bad[10] ^= 0x40;  // c_r corrupted in transit
     host->Send(bad, &why);
     reply = host->Receive(kCapMs, &why);
-    Check(reply && reply->size() == 2 &&
+    check(reply && reply->size() == 2 &&
               (*reply)[0] == static_cast<std::uint8_t>(CalibrationResult::kBadCrc),
           "corrupted record refused with kBadCrc");
   }
@@ -100,14 +97,13 @@ int main() {
   board.join();
   // Read once the board's thread has stopped: what it applied, and kept.
   const ControlConfig& c = app.control().config();
-  Check(app.calibrated() && c.backlash.c_right == Angle::FromDouble(0.0195) &&
+  check(app.calibrated() && c.backlash.c_right == Angle::FromDouble(0.0195) &&
             c.backlash.c_left == Angle::FromDouble(-0.0161) &&
             c.sea_stiffness == Stiffness::FromDouble(0.64) &&
             c.joint_encoder.zero_offset == 123,
         "board applied c_r, c_l, stiffness and zero count, and kept them");
-  Check(node.counters().calibrations_accepted == 1 &&
+  check(node.counters().calibrations_accepted == 1 &&
             node.counters().calibrations_refused == 1,
         "board counters: 1 accepted, 1 refused");
-  std::printf("%d passed, %d failed\n", g_passed, g_failed);
-  return g_failed == 0 ? 0 : 1;
+  return check.Finish();
 }

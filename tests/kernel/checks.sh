@@ -15,6 +15,12 @@ check() {  # DESCRIPTION COMMAND...: runs the command; PASS when it exits 0
   fi
 }
 
+# STATUS WANT DESCRIPTION: a check that a command's exit status (STATUS, the $? it
+# left) is WANT; the description is followed by the status it got.
+check_exit() {
+  check "$3 (exit $1)" test "$1" -eq "$2"
+}
+
 # FILE TEXT: waits until FILE holds TEXT, for output of a process still running. A
 # check waits for what happens, never for a time: the cap (${MJC_WAIT_CAP_S:-300} s)
 # only ends the wait for something that will not come, and is far beyond any slow

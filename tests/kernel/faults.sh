@@ -46,8 +46,7 @@ check "the trial runs" wait_for "$work/trial.err" "repetition 1/20"
 
 cansend vcan0 20000040#0000000000000000  # CAN_ERR_FLAG | CAN_ERR_BUSOFF
 wait "$trial"
-status=$?
-check "mjc trial ends with exit 5, the board faulted (exit $status)" test "$status" -eq 5
+check_exit $? 5 "mjc trial ends with exit 5, the board faulted"
 check "mjc trial says bus-off at once" grep -q "mjc trial: vcan0: the CAN controller reported bus-off (1 since start)" "$work/trial.err"
 check "mjc trial names fault 303" grep -q "fault 303 (CAN bus-off)" "$work/trial.err"
 check "the board says bus-off" wait_for "$work/sim.err" "$board_name: vcan0: bus-off at"
@@ -60,20 +59,17 @@ wait "$monitor"
 
 # The board recovered (it still answers) and its cause is gone: an explicit clear works.
 "$mjc" clear --iface vcan0 --node 1 >"$work/clear.out" 2>"$work/clear.err"
-status=$?
-check "mjc clear exits 0 (exit $status)" test "$status" -eq 0
+check_exit $? 0 "mjc clear exits 0"
 check "mjc clear says what it cleared" grep -q "node 1: fault 303 (CAN bus-off) cleared" "$work/clear.out"
 "$mjc" clear --iface vcan0 --node 1 >"$work/clear2.out" 2>&1
 check "a second clear finds nothing latched" grep -q "node 1: no fault latched" "$work/clear2.out"
 "$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 3 \
   --frequency-hz 2 --rest-s 0.2 --out "$work/after" --no-figure >"$work/after.out" 2>"$work/after.err"
-status=$?
-check "the next trial completes (exit $status)" test "$status" -eq 0
+check_exit $? 0 "the next trial completes"
 "$mjc" stop --iface vcan0 --node 1 >"$work/stop.out" 2>&1
 check "mjc stop is answered" grep -q "node 1 stopped" "$work/stop.out"
 "$mjc" clear --iface vcan0 --node 2 --timeout-ms 300 >"$work/silent.out" 2>"$work/silent.err"
-status=$?
-check "mjc clear of an absent node exits 3 (exit $status)" test "$status" -eq 3
+check_exit $? 3 "mjc clear of an absent node exits 3"
 check "and says why" grep -q "mjc clear: node 2 is silent (is the board powered and on vcan0? try mjc list)" "$work/silent.err"
 
 # A cause that stays: the joint encoder flags an error (the board's SIGUSR1) at rest.
@@ -85,14 +81,12 @@ check "the board latched fault 101" wait_for "$work/ef.out" "fault 101 (joint en
 kill -INT "$monitor"
 wait "$monitor"
 "$mjc" clear --iface vcan0 --node 1 >"$work/refused.out" 2>"$work/refused.err"
-status=$?
-check "mjc clear while the cause is present exits 4 (exit $status)" test "$status" -eq 4
+check_exit $? 4 "mjc clear while the cause is present exits 4"
 check "and names the fault still held" grep -q "mjc clear: node 1: fault 101 (joint encoder error flag) not cleared: its cause is still present" "$work/refused.err"
 kill -USR2 "$sim"
 check "the encoder recovers" wait_for "$work/sim.err" "joint encoder error flag cleared"
 "$mjc" clear --iface vcan0 --node 1 >"$work/cleared.out" 2>&1
-status=$?
-check "once it is gone, mjc clear exits 0 (exit $status)" test "$status" -eq 0
+check_exit $? 0 "once it is gone, mjc clear exits 0"
 check "and says what it cleared" grep -q "node 1: fault 101 (joint encoder error flag) cleared" "$work/cleared.out"
 
 kill -INT "$sim"

@@ -87,8 +87,7 @@ for n in 1 2; do
 done
 build=$("$mjc" --version | sed -n 's/^mjc .* (build \([0-9a-f]\{8\}\)\(+dirty\)\{0,1\})$/\1/p')
 "$mjc" flash --iface vcan0 --info >info1.out 2>info1.err
-status=$?
-check "mjc flash --info lists both (exit $status)" test "$status" -eq 0
+check_exit $? 0 "mjc flash --info lists both"
 check "  running their application with mjc's build" \
   sh -c "grep -qE '^ +1  application  $build' info1.out && grep -qE '^ +2  application  $build' info1.out"
 
@@ -120,8 +119,7 @@ check "board 2 reports 40 % of its upload" wait_progress 400
 kill -9 "$sim2"  # a power cut
 wait "$sim2" 2>/dev/null
 wait "$flash"
-status=$?
-check "mjc flash exits 8: a board was not updated (exit $status)" test "$status" -eq 8
+check_exit $? 8 "mjc flash exits 8: a board was not updated"
 check "  board 1 was: its new build, checked by the board" \
   grep -qE "^node 1: updated to $new \(test-$new\) in [0-9.]+ s: 64.0 KB sent in [0-9.]+ s .*checked by the board" flash1.out
 check "  board 2 is named: silent in the upload, run mjc flash again" \
@@ -145,8 +143,7 @@ check "  board 1 runs $new" grep -qE "^ +1  application  $new" list2.out
 check "mjc flash --info --json: board 2 in its bootloader" \
   jq -se 'map(select(.node == 2))[0] | .image == "bootloader" and .boot.reason == "no valid image"' info2.json
 "$mjc" flash --iface vcan0 --node 2 new.bin >flash2.out 2>flash2.err
-status=$?
-check "a second mjc flash ends board 2's update (exit $status)" test "$status" -eq 0
+check_exit $? 0 "a second mjc flash ends board 2's update"
 check "  with its new build" grep -qE "^node 2: updated to $new" flash2.out
 check "board 2 starts the new image" wait_for sim2b.err "mjc sim: node 2 on vcan0 (default, robot alone): build $new"
 

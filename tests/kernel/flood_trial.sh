@@ -9,6 +9,7 @@
 # out. How many the kernel drops is a figure, not a verdict: it depends on how much CPU
 # the generators leave the board, which is the machine's speed (at the kernel layer's 3x
 # slow-down the board ran at a third of real time and the kernel dropped a quarter).
+# Prints the two as ./bench's vm_flood_frames_dropped and vm_flood_frames_per_s lines.
 # usage: flood_trial.sh <path of mjc>
 set -u
 mjc=$1
@@ -59,7 +60,7 @@ ignored=$(field ignored)
 rx_dropped=$(field 'rx dropped')
 backlog=$(($(backlog_dropped) - backlog_before))
 tx_dropped=$(field 'tx dropped')
-echo "flood_frames_dropped: $((rx_dropped + backlog + tx_dropped)) (of 2 x $frames flood frames; rx $rx_dropped, input backlog $backlog, tx $tx_dropped)"
+echo "vm_flood_frames_dropped: $((rx_dropped + backlog + tx_dropped)) frames (of 2 x $frames flood frames; rx $rx_dropped, input backlog $backlog, tx $tx_dropped)"
 # At most: the flood's frames and the bus marker (counted malformed or ignored, if the
 # board's filters let it in).
 [ "$malformed" -le $((frames + 1)) ] || fail "malformed $malformed, more than the $frames sent and the marker"
@@ -70,5 +71,5 @@ echo "flood_frames_dropped: $((rx_dropped + backlog + tx_dropped)) (of 2 x $fram
   fail "malformed $malformed + ignored $ignored + dropped by the kernel $rx_dropped at the socket, $backlog in the input backlog: fewer than the $((2 * frames)) sent"
 [ "$tx_dropped" = 0 ] || fail "tx dropped $tx_dropped"
 awk -v s="$start" -v e="$end" -v n="$frames" \
-  'BEGIN { printf "flood_frames_per_s: %.0f (2 x %d frames in %.2f s, during the trial)\n", 2 * n / (e - s), n, e - s }'
+  'BEGIN { printf "vm_flood_frames_per_s: %.0f frames/s (2 x %d frames in %.2f s, during the trial)\n", 2 * n / (e - s), n, e - s }'
 echo "PASS every window arrived and every flood frame was accounted for"

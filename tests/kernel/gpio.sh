@@ -134,8 +134,7 @@ check "  mjc estop says so" wait_for "$work/estop.out" "emergency stop: $chip:es
 check "  and names both boards' confirmations" wait_for "$work/estop.out" "node 2 stopped: fault 305 (emergency stop)"
 check "  (node 1)" grep -q "node 1 stopped: fault 305 (emergency stop)" "$work/estop.out"
 wait "$trial"
-status=$?
-check "the trial ends faulted: exit 5 ($status)" test "$status" -eq 5
+check_exit $? 5 "the trial ends faulted"
 check "  naming the emergency stop" grep -q "the board faulted: fault 305 (emergency stop)" "$work/t1.err"
 check "held, the StopAll is repeated" wait_frames 000 53544F50 3
 # A clear while the button is held: the board may take it (then the next repeat stops
@@ -177,8 +176,7 @@ check "  holding the line" wait_holder 0 '"mjc'
 node2_faults=$(frames 012 3101)
 set_input 0 1
 wait "$trial"
-status=$?
-check "the press ends it: exit 6 ($status)" test "$status" -eq 6
+check_exit $? 6 "the press ends it"
 check "  saying every board was told to stop and node 1 confirmed" \
   grep -q "^mjc trial: emergency stop on $chip:estop: every board was told to stop; node 1 stopped (fault 305, emergency stop: mjc clear --node 1 releases it); [0-9]* windows saved to $work/t2/windows.csv" "$work/t2.err"
 check "  run.json: emergency_stop" grep -q '"outcome": "emergency_stop"' "$work/t2/run.json"
@@ -198,8 +196,7 @@ sweep=$!
 check "a calibration sweep watching the line runs" wait_for "$work/cal.err" "[sweep] cycle"
 set_input 0 1
 wait "$sweep"
-status=$?
-check "the press ends it: exit 6 ($status)" test "$status" -eq 6
+check_exit $? 6 "the press ends it"
 check "  saying so, with the samples kept and nothing fitted" \
   grep -q "^mjc calibrate: emergency stop on $chip:estop: every board was told to stop; node 1 stopped (fault 305, emergency stop: mjc clear --node 1 releases it); [0-9]* sweep samples saved to $work/cal/sweep.csv (not fitted)" "$work/cal.err"
 check "  run.json: emergency_stop" grep -q '"outcome": "emergency_stop"' "$work/cal/run.json"
@@ -218,8 +215,7 @@ falling0=$(read_dbg 1 falling)
 "$mjc" trial --iface vcan0 --node 1 --sync-line "$chip:sync" --protocol amplitude \
   --amplitudes 10 15 --reps 3 --frequency-hz 1 --rest-s 0.2 --out "$work/t3" --no-figure \
   >"$work/t3.out" 2>"$work/t3.err"
-status=$?
-check "a trial with a sync line completes ($status)" test "$status" -eq 0
+check_exit $? 0 "a trial with a sync line completes"
 flexions=$(grep -c ',flexion,' "$work/t3/windows.csv")
 extensions=$(grep -c ',extension,' "$work/t3/windows.csv")
 rising=$(($(read_dbg 1 rising) - rising0))
@@ -277,8 +273,7 @@ flash=$!
 check "mjc flash pulses its reset line after the first hold" wait_for "$work/flash.err" "mjc flash: node 3: $chip:nrst2 pulsed low 10 ms"
 kill -CONT "$sim3"
 wait "$flash"
-status=$?
-check "the hanging board is updated ($status)" test "$status" -eq 0
+check_exit $? 0 "the hanging board is updated"
 check "  saying so" grep -q "^node 3: updated to $new" "$work/flash.out"
 check "  it restarted on its pin" grep -q "mjc sim: reset (reset pin)" "$work/sim3.err"
 check "  and its bootloader was held by the host" grep -q "node 3: bootloader stays: ready (held by a host)" "$work/sim3.err"
@@ -294,8 +289,7 @@ check "a trial runs on node 1" wait_for "$work/t4.err" "repetition 1/20"
 falling2=$(read_dbg 2 falling)
 "$mjc" flash --iface vcan0 --node 1 --reset-line "$chip:nrst1" "$work/new.bin" \
   >/dev/null 2>"$work/flash1.err"
-status=$?
-check "mjc flash --reset-line refuses a board in a motion: exit 4 ($status)" test "$status" -eq 4
+check_exit $? 4 "mjc flash --reset-line refuses a board in a motion"
 check "  saying why" grep -q "node 1 is running a motion: stop it first (mjc stop --node 1); nothing was done (its reset line would stop it mid-motion)" "$work/flash1.err"
 check "  and its NRST was not touched" test "$(read_dbg 2 falling)" -eq "$falling2"
 "$mjc" stop --iface vcan0 --node 1 >/dev/null 2>&1

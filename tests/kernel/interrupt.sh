@@ -58,18 +58,26 @@ start_trial() {  # OUT: a 40 s trial in the background, once its first window is
   wait_for "$work/$1.err" "repetition 1/20"
 }
 
+# SIGNAL PID TOOL WHAT CSV ERR [TAIL]: interrupts TOOL (mjc trial, mjc calibrate),
+# running as PID, with SIGNAL; checks that it exits 6 saying on ERR that it stopped the
+# board and saved N of WHAT to CSV (then TAIL), and that CSV holds those N rows below
+# its two header lines.
+interrupt_keeps() {
+  local signal=$1 pid=$2 tool=$3 what=$4 csv=$5 err=$6 tail=${7:-} n
+  kill "-$signal" "$pid"
+  wait "$pid"
+  check_exit $? 6 "$tool exits 6 on SIG$signal"
+  check "  saying it stopped the board and where the $what are" \
+    grep -q "^$tool: interrupted: node 1 stopped; [1-9][0-9]* $what saved to $csv$tail" "$err"
+  n=$(sed -n "s/.*stopped; \([0-9]*\) $what saved.*/\1/p" "$err")
+  check "  every one of them in ${csv##*/} (${n:-?})" \
+    test "$(($(wc -l <"$csv") - 2))" = "${n:-x}"
+}
+
 # SIGINT mid-trial, a monitor beside it.
 check "a trial runs, mjc monitor beside it" start_trial int
 t0=$(now)
-kill -INT "$trial"
-wait "$trial"
-status=$?
-check "mjc trial exits 6 on SIGINT (exit $status)" test "$status" -eq 6
-check "  saying it stopped the board and where the windows are" \
-  grep -q "^mjc trial: interrupted: node 1 stopped; [1-9][0-9]* windows saved to $work/int/windows.csv" "$work/int.err"
-saved=$(sed -n 's/.*stopped; \([0-9]*\) windows saved.*/\1/p' "$work/int.err")
-check "  every one of them in windows.csv (${saved:-?})" \
-  test "$(($(wc -l <"$work/int/windows.csv") - 2))" = "${saved:-x}"
+interrupt_keeps INT "$trial" "mjc trial" windows "$work/int/windows.csv" "$work/int.err"
 check "the board says idle, bridge off, calibrated" wait_after "$t0" 301 0001
 t1=$(first_after "$t0" 301 0001)
 check "  and it was not a fault" sh -c "! awk -v t=$t0 '{ gsub(/[()]/, \"\", \$1) } \$1 > t' '$work/bus.log' | grep -q ' 011#'"
@@ -83,23 +91,15 @@ t0=$(now)
   --out "$work/cal" >"$work/sweep.out" 2>"$work/sweep.err" &
 sweep=$!
 check "a calibration sweep runs" wait_after "$t0" 301 0103  # calibrating, bridge on
-kill -TERM "$sweep"
-wait "$sweep"
-status=$?
-check "mjc calibrate exits 6 on SIGTERM (exit $status)" test "$status" -eq 6
-check "  saying it stopped the board and kept the samples" \
-  grep -q "^mjc calibrate: interrupted: node 1 stopped; [1-9][0-9]* sweep samples saved to $work/cal/sweep.csv (not fitted)" "$work/sweep.err"
-samples=$(sed -n 's/.*stopped; \([0-9]*\) sweep samples.*/\1/p' "$work/sweep.err")
-check "  every one of them in the file (${samples:-?})" \
-  test "$(($(wc -l <"$work/cal/sweep.csv") - 2))" = "${samples:-x}"
+interrupt_keeps TERM "$sweep" "mjc calibrate" "sweep samples" "$work/cal/sweep.csv" \
+  "$work/sweep.err" " (not fitted)"
 check "  and no calibration written" test ! -e "$work/cal/calibration.json"
 
 # mjc stop from another terminal.
 check "another trial runs" start_trial stopped
 "$mjc" stop --iface vcan0 --node 1 >"$work/stop.out" 2>&1
 wait "$trial"
-status=$?
-check "a trial stopped by mjc stop exits 6 (exit $status)" test "$status" -eq 6
+check_exit $? 6 "a trial stopped by mjc stop exits 6"
 check "  saying it was stopped before its end" grep -q "stopped before its end" "$work/stopped.err"
 
 # The commander dies; the monitor's heartbeats go on.
@@ -113,8 +113,7 @@ awk -v a="$t0" -v b="${t1:-0}" 'BEGIN { printf "orphan_motion_s: %.3f s (command
 check "  the monitor was sending all along" kill -0 "$monitor"
 "$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 3 \
   --out "$work/refused" >"$work/refused.out" 2>"$work/refused.err"
-status=$?
-check "the next trial is refused, exit 4 (exit $status)" test "$status" -eq 4
+check_exit $? 4 "the next trial is refused, exit 4"
 check "  naming the fault and mjc clear" \
   grep -q "holds fault 302 (host heartbeat lost).*mjc clear --node 1" "$work/refused.err"
 

@@ -39,8 +39,7 @@ sim2=$!
 check "board 1 comes up" wait_for sim1.err "mjc sim: node 1 on vcan0"
 check "board 2 comes up" wait_for sim2.err "mjc sim: node 2 on vcan0"
 "$mjc" list --iface vcan0 >list.out 2>list.err
-status=$?
-check "mjc list hears both boards (exit $status)" test "$status" -eq 0
+check_exit $? 0 "mjc list hears both boards"
 check "  node 1: application, its build, idle, uncalibrated, power-on" \
   grep -qE "^ +1  application  $build(\+dirty)? .* idle +no +power-on" list.out
 check "  node 2 likewise" grep -qE "^ +2  application  $build" list.out
@@ -56,8 +55,7 @@ JSON
 check "node 2 takes a calibration" "$mjc" cal upload cal.json --iface vcan0 --node 2
 MJC_IFACE=vcan0 "$mjc" trial --node 2 --protocol amplitude --amplitudes 15 --reps 3 \
   --frequency-hz 2 --rest-s 0.2 --subject S07 --no-figure >trial.out 2>trial.err
-status=$?
-check "a trial on MJC_IFACE's interface completes (exit $status)" test "$status" -eq 0
+check_exit $? 0 "a trial on MJC_IFACE's interface completes"
 dir=$(sed -n 's|^mjc trial: writing to \(out/trial/[0-9-]*T[0-9-]*Z\)/ (a new folder)$|\1|p' trial.err)
 check "  into a new timestamped folder, and says so (${dir:-none})" test -d "${dir:-/nonexistent}"
 check "  the progress counts repetitions from 1" grep -q "repetition 3/3 extension" trial.err
@@ -88,8 +86,7 @@ check "mjc param dump writes node 1's parameters" \
 check "  this protocol, the node, its build, the board's values in the list's units" \
   jq -e ".protocol_version == 1 and .node == 1 and (.build | startswith(\"$build\")) and .params.heartbeat_hz == 10 and .params.telemetry_angles_hz == 1000 and .params.position_kp == 40 and .read_only.calibrated == 0 and .read_only.protocol_version == 1" params1.json
 "$mjc" param set --iface vcan0 --node 1 telemetry_torque_hz=20 position_kp=0.1 >set.out 2>set.err
-status=$?
-check "mjc param set writes two parameters and reads them back (exit $status)" test "$status" -eq 0
+check_exit $? 0 "mjc param set writes two parameters and reads them back"
 check "  saying what a value between steps will be stored as" grep -qx \
   "mjc param set: warning: position_kp: 0.1 will be stored as 0.100006103515625 (the nearest step of 1/65536)" set.err
 check "  and what the board holds" grep -qx "node 1: position_kp = 0.100006103515625 1/rad" set.out
@@ -117,8 +114,7 @@ check "a value out of range is refused" \
 check "  with its range" grep -q "range.json: params.heartbeat_hz: 20000 is outside 0..10000 Hz; nothing was sent$" range.err
 check "  nothing was sent: node 1 holds what was set" held
 "$mjc" param restore --iface vcan0 --node 1 params1.json >restore.out 2>restore.err
-status=$?
-check "mjc param restore brings the dump back (exit $status)" test "$status" -eq 0
+check_exit $? 0 "mjc param restore brings the dump back"
 check "  the two set ones changed, all read back" grep -qE \
   "^node 1: [0-9]+ parameters restored from params1.json \(2 changed, [0-9]+ already held\); read back identical$" restore.out
 check "  a second dump holds every value of the first" sh -c "'$mjc' param dump --iface vcan0 --node 1 -o params1b.json >/dev/null && jq -en --slurpfile a params1.json --slurpfile b params1b.json '\$a[0].params == \$b[0].params and \$a[0].read_only == \$b[0].read_only'"
@@ -133,8 +129,7 @@ check "  saying why; nothing sent" grep -qx \
   "mjc param restore: node 2 is running (a trial or a stream): the board takes control parameters only while idle; nothing was sent" busy.err
 kill -INT "$long"
 wait "$long"
-status=$?
-check "  the trial, interrupted, stops the board (exit $status)" test "$status" -eq 6
+check_exit $? 6 "  the trial, interrupted, stops the board"
 
 # A third board answering with node 2's id.
 "$mjc" sim --iface vcan0 --node 2 2>sim3.err &
@@ -146,8 +141,7 @@ monitor=$!
 # yet (on a slow machine), and no listener can tell of a board it has not heard.
 check "mjc monitor --json reports node 2 ambiguous" wait_for monitor.json '"ambiguous":true'
 "$mjc" list --iface vcan0 >list2.out 2>list2.err
-status=$?
-check "mjc list: two boards behind node 2, exit 7 (exit $status)" test "$status" -eq 7
+check_exit $? 7 "mjc list: two boards behind node 2, exit 7"
 check "  saying so" grep -qE "^ +2  TWO BOARDS: node 2 is answered by two boards \(instances [0-9a-f]{4} and [0-9a-f]{4}\): give each its own node id" list2.out
 check "  node 1 is still listed" grep -qE "^ +1  application" list2.out
 "$mjc" list --iface vcan0 --json >list2.json 2>/dev/null
@@ -157,14 +151,12 @@ check "a command on node 2 refuses: exit 7, one line" \
   refuses 7 download.err "$mjc" cal download --iface vcan0 --node 2
 check "  naming both boards, nothing done" grep -q "^mjc cal download: node 2 is answered by two boards (.*): give each its own node id; nothing was done$" download.err
 "$mjc" trial --iface vcan0 --node 2 --out amb --no-figure >amb.out 2>amb.err
-status=$?
-check "a trial on node 2 refuses (exit $status)" test "$status" -eq 7
+check_exit $? 7 "a trial on node 2 refuses"
 check "  and its run.json says why" jq -e '.end.outcome == "ambiguous" and (.end.message | test("two boards"))' amb/run.json
 check "mjc monitor --json shows node 1 live" jq -se 'any(.[]; .node == 1 and .heard and .state == "idle")' monitor.json
 kill -INT "$monitor"
 wait "$monitor"
-status=$?
-check "  and exits 7 (exit $status)" test "$status" -eq 7
+check_exit $? 7 "  and exits 7"
 check "  every line is JSON with a UTC time" \
   jq -se 'all(.[]; .time | test("^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:.]+Z$"))' monitor.json
 

@@ -2,8 +2,8 @@
 // scripts/kernel-vm, with vcan0 at CAN FD MTU): classic and FD frames, filters,
 // kernel timestamps, a protocol frame through the codec, a burst with the ENOBUFS
 // back-off where every frame must arrive in order, and an ISO-TP transfer. Prints one
-// line per check, "vcan_frames_per_s: N" and "isotp_600B_ms: N" figures, and the
-// closing "N passed, N failed".
+// line per check, "vcan_frames_per_s: N frames/s" and "isotp_600B_ms: N ms" figures, and
+// the closing "N passed, N failed".
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -13,18 +13,14 @@
 
 #include "mjc/host/can_link.h"
 #include "mjc/protocol/codec.h"
+#include "self_check.h"
 
 namespace {
 
 using namespace mjc;
 using namespace mjc::host;
 
-int g_passed = 0, g_failed = 0;
-
-void Check(bool ok, const std::string& what) {
-  std::printf("%s %s\n", ok ? "PASS" : "FAIL", what.c_str());
-  (ok ? g_passed : g_failed)++;
-}
+kernel_test::SelfCheck check;
 
 protocol::CanFrame Frame(std::uint32_t id, std::uint8_t length, std::uint8_t seed,
                          bool fd) {
@@ -63,27 +59,27 @@ int main(int argc, char** argv) {
 
   // Classic frame, with its kernel timestamp.
   const auto classic = Frame(0x123, 8, 0x10, false);
-  Check(tx->Send(classic, &why), "send classic: " + why);
+  check(tx->Send(classic, &why), "send classic: " + why);
   auto got = rx->Receive(kCapMs, &why);
-  Check(got && Same(got->frame, classic), "classic frame arrives exactly");
+  check(got && Same(got->frame, classic), "classic frame arrives exactly");
   const double now = static_cast<double>(std::time(nullptr));
-  Check(got && got->timestamp_s > now - 5 && got->timestamp_s < now + 5,
+  check(got && got->timestamp_s > now - 5 && got->timestamp_s < now + 5,
         "kernel timestamp (SO_TIMESTAMP) is the receive time");
 
   // A 64-byte CAN FD frame.
   const auto fd = Frame(0x124, 64, 0x80, true);
-  Check(tx->Send(fd, &why), "send FD: " + why);
+  check(tx->Send(fd, &why), "send FD: " + why);
   got = rx->Receive(kCapMs, &why);
-  Check(got && Same(got->frame, fd), "64-byte CAN FD frame arrives exactly");
+  check(got && Same(got->frame, fd), "64-byte CAN FD frame arrives exactly");
 
   // Filters: node 3 only.
   const IdFilter node3{0x003, 0x00F};
-  Check(rx->SetFilters({&node3, 1}, &why), "set filter: " + why);
+  check(rx->SetFilters({&node3, 1}, &why), "set filter: " + why);
   tx->Send(Frame(protocol::MakeId(0x30, 2), 1, 1, false), &why);
   tx->Send(Frame(protocol::MakeId(0x30, 3), 1, 2, false), &why);
   got = rx->Receive(kCapMs, &why);
   const bool only3 = got && protocol::NodeOf(got->frame.id) == 3 && !rx->Receive(50);
-  Check(only3, "filter passes node 3 and drops node 2");
+  check(only3, "filter passes node 3 and drops node 2");
   rx->SetFilters({}, &why);
 
   // A protocol frame through the codec and the kernel.
@@ -93,7 +89,7 @@ int main(int argc, char** argv) {
   tx->Send(protocol::Encode(hb, 5), &why);
   got = rx->Receive(kCapMs, &why);
   protocol::Heartbeat back;
-  Check(got && protocol::Decode(got->frame, &back) == protocol::DecodeError::kOk &&
+  check(got && protocol::Decode(got->frame, &back) == protocol::DecodeError::kOk &&
             back.tick == 424242 && back.state == protocol::BoardState::kRunning,
         "heartbeat encoded, sent, received and decoded");
 
@@ -124,18 +120,18 @@ int main(int argc, char** argv) {
   // Every frame accounted for: received in order, or counted as dropped by the kernel.
   // With the 4 MB receive buffer none is dropped.
   const auto dropped = static_cast<int>(rx->stats().rx_dropped);
-  Check(send_failures == 0 && received + dropped == kBurst && out_of_order == 0 &&
+  check(send_failures == 0 && received + dropped == kBurst && out_of_order == 0 &&
             dropped == 0,
         "burst of " + std::to_string(kBurst) + " frames: " + std::to_string(received) +
             " received in order, " + std::to_string(dropped) + " dropped, " +
             std::to_string(send_failures) + " send failures, " +
             std::to_string(tx->stats().tx_retries) + " ENOBUFS back-offs");
-  std::printf("vcan_frames_per_s: %.0f\n", received / seconds);
+  std::printf("vcan_frames_per_s: %.0f frames/s\n", received / seconds);
 
   // ISO-TP: 600 bytes between two ids.
   auto a = IsoTpLink::Open(ifname, 0x3E1, 0x3F1, &why);
   auto b = IsoTpLink::Open(ifname, 0x3F1, 0x3E1, &why);
-  Check(a && b, "ISO-TP sockets: " + why);
+  check(a && b, "ISO-TP sockets: " + why);
   if (a && b) {
     std::vector<std::uint8_t> payload(600);
     for (std::size_t i = 0; i < payload.size(); ++i)
@@ -147,15 +143,14 @@ int main(int argc, char** argv) {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
             .count();
-    Check(data && *data == payload, "ISO-TP moves 600 bytes intact");
-    std::printf("isotp_600B_ms: %.1f\n", ms);
+    check(data && *data == payload, "ISO-TP moves 600 bytes intact");
+    std::printf("isotp_600B_ms: %.1f ms\n", ms);
   }
 
   // A missing interface is refused with its name.
   auto none = SocketCanLink::Open("nosuchcan9", &why);
-  Check(!none && why.find("nosuchcan9") != std::string::npos,
+  check(!none && why.find("nosuchcan9") != std::string::npos,
         "missing interface: " + why);
 
-  std::printf("%d passed, %d failed\n", g_passed, g_failed);
-  return g_failed == 0 ? 0 : 1;
+  return check.Finish();
 }

@@ -16,6 +16,7 @@
 #include <limits>
 #include <new>
 #include <numbers>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -693,6 +694,28 @@ TEST(PlantSensors, JointNoiseIsSeededGaussianOfTheConfiguredSize) {
   EXPECT_NEAR(std::sqrt(sum_sq / kReads - mean * mean), std::sqrt(1.0 + 1.0 / 12.0),
               0.05);
   EXPECT_GT(differ, kReads / 2);
+}
+
+TEST(PlantSensors, JointNoiseIsTheStandardNormalSequenceOfTheSeed) {
+  // The plant draws its noise a block at a time with its own log, sine and cosine;
+  // the values are StandardNormal's to an ulp, so even at 100 counts of noise (the
+  // most a set may ask) every rounded count is the one StandardNormal's value gives.
+  PlantParams p = Quiet("default");
+  p.sensors.joint_noise_counts = 100.0;
+  p.sensors.noise_seed = 7;
+  Plant plant(p);
+  std::mt19937_64 rng(7);
+  bool has_spare = false;
+  double spare = 0;
+  for (int n = 0; n < 100000; ++n) {
+    const double noise = 100.0 * mjc::plant::StandardNormal(&rng, &has_spare, &spare);
+    ASSERT_LT(std::abs(noise), 8000.0);  // within the signed 14-bit count
+    // The joint is at rest at 0: the count is round(noise), signed.
+    const int count = plant.JointFrame() & 0x3FFF;
+    ASSERT_EQ(count >= 8192 ? count - 16384 : count,
+              static_cast<int>(std::floor(noise + 0.5)))
+        << n;
+  }
 }
 
 TEST(PlantSensors, MotorNoiseJittersTheCount) {

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <string>
 
+#include "experiment_rig.h"
 #include "mjc/app/joint_config.h"
 #include "mjc/host/report.h"
 #include "mjc/host/robot_description.h"
@@ -33,14 +34,10 @@ host::RobotDescription Load(const std::string& file) {
   return *robot;
 }
 
-// The plant of the example joint: the default parameter set (its slack moved off the
-// default's, so a fit that kept the default's numbers would show) with the
-// description's pulleys, springs and zeros.
+// The plant of the example joint (experiment_rig.h, shared with ./bench's *_alpha125
+// figures).
 plant::PlantParams ExamplePlant(const host::RobotDescription& robot) {
-  plant::PlantParams base = plant::LoadPlantParams("default");
-  base.cable.c_right_rad = 1.6 * kDeg;
-  base.cable.c_left_rad = -0.7 * kDeg;
-  return PlantForRobot(robot, base, app::DefaultJointConfig(), "example-alpha-1.25.json");
+  return rig::AlphaExamplePlant(robot);
 }
 
 TEST(RobotDescription, DefaultDescriptionAgreesWithTheDefaultPlant) {

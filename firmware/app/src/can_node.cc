@@ -19,7 +19,15 @@ Frequency FromMilliHertz(std::uint16_t mhz) {
       static_cast<std::int32_t>((static_cast<std::int64_t>(mhz) * 65536 + 500) / 1000));
 }
 
-// The timing a wire trial or sweep config carries, into the core's config.
+// The amplitude a wire trial or sweep config carries, into the core's config.
+void SetAmplitude(const protocol::TrialConfig& wire, SineConfig* c) {
+  c->amplitude = wire.amplitude;
+}
+void SetAmplitude(const protocol::SweepConfig& wire, RampedSineConfig* c) {
+  c->end_amplitude = wire.end_amplitude;
+}
+
+// A wire trial or sweep config, into the core's config.
 template <class Core, class Wire>
 Core Oscillation(const Wire& wire, std::uint32_t tick_hz) {
   Core c;
@@ -27,6 +35,7 @@ Core Oscillation(const Wire& wire, std::uint32_t tick_hz) {
   c.repetitions = wire.repetitions;
   c.rest_ms = wire.rest_100ms * 100u;
   c.tick_rate_hz = tick_hz;
+  SetAmplitude(wire, &c);
   return c;
 }
 
@@ -39,6 +48,19 @@ bool WindowReportable(Frequency f, std::uint32_t tick_hz) {
   }
   return 2u * std::uint64_t{QuarterTicks(f, tick_hz)} <=
          std::numeric_limits<std::uint16_t>::max();
+}
+
+// Starts a trial or a sweep (`start` takes the core's config) from the wire config the
+// host sent: refused without one, or when a window would be too long to report.
+template <class Core, class Wire, class Start>
+CommandOutcome StartOscillation(bool have, const Wire& wire, std::uint32_t tick_hz,
+                                Start start) {
+  if (!have) return {CommandOutcomeCode::kRefusedInvalid, 0};
+  const Core c = Oscillation<Core>(wire, tick_hz);
+  if (!WindowReportable(c.frequency, tick_hz)) {
+    return {CommandOutcomeCode::kRefusedInvalid, protocol::kDetailWindowTooLong};
+  }
+  return start(c);
 }
 
 bool IsStart(CommandCode code) {
@@ -174,32 +196,16 @@ void CanNode::HandleCommand(const protocol::Command& c) {
     case CommandCode::kClearFaults:
       o = app_->ClearFaults(tag);
       break;
-    case CommandCode::kStartTrial: {
-      if (!have_trial_) {
-        o = {CommandOutcomeCode::kRefusedInvalid, 0};
-        break;
-      }
-      auto sine = Oscillation<SineConfig>(trial_, hz);
-      sine.amplitude = trial_.amplitude;
-      o = WindowReportable(sine.frequency, hz)
-              ? app_->StartTrial(sine, tag)
-              : CommandOutcome{CommandOutcomeCode::kRefusedInvalid,
-                               protocol::kDetailWindowTooLong};
+    case CommandCode::kStartTrial:
+      o = StartOscillation<SineConfig>(have_trial_, trial_, hz, [&](const SineConfig& s) {
+        return app_->StartTrial(s, tag);
+      });
       break;
-    }
-    case CommandCode::kStartSweep: {
-      if (!have_sweep_) {
-        o = {CommandOutcomeCode::kRefusedInvalid, 0};
-        break;
-      }
-      auto sweep = Oscillation<RampedSineConfig>(sweep_, hz);
-      sweep.end_amplitude = sweep_.end_amplitude;
-      o = WindowReportable(sweep.frequency, hz)
-              ? app_->StartCalibrationSweep(sweep, tag)
-              : CommandOutcome{CommandOutcomeCode::kRefusedInvalid,
-                               protocol::kDetailWindowTooLong};
+    case CommandCode::kStartSweep:
+      o = StartOscillation<RampedSineConfig>(
+          have_sweep_, sweep_, hz,
+          [&](const RampedSineConfig& s) { return app_->StartCalibrationSweep(s, tag); });
       break;
-    }
     case CommandCode::kStartStream:
       o = app_->StartStream(config_.stream_rate, tag);
       break;

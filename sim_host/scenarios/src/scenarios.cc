@@ -43,10 +43,11 @@ double EtaPercent(double load, double unload) {
 
 }  // namespace
 
-SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions) {
+SineConfig PaperSine(double amplitude_deg, std::uint16_t repetitions,
+                     double frequency_hz) {
   SineConfig s;
   s.amplitude = Angle::Quantize(amplitude_deg * std::numbers::pi / 180.0);
-  s.frequency = Frequency::FromDouble(kPaperFrequencyHz);
+  s.frequency = Frequency::Quantize(frequency_hz);
   s.repetitions = repetitions;
   s.rest_ms = 1500;  // back to back: the paper's 3 s between amplitudes
   return s;
@@ -297,7 +298,7 @@ RepeatabilityOutcome SummariseRepeatability(std::vector<TrialOutcome> trials) {
 RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams& subject,
                                       double amplitude_deg, std::uint64_t seed,
                                       const ProgressFn& progress, double progress_from,
-                                      double progress_to) {
+                                      double progress_to, double frequency_hz) {
   std::vector<TrialOutcome> trials;
   const int kTrials = 5;
   for (int trial = 0; trial < kTrials; ++trial) {
@@ -308,7 +309,8 @@ RepeatabilityOutcome RunRepeatability(SimBoard& board, const plant::PlantParams&
     // Re-don: a new seeded perturbation of the subject's interface.
     board.plant().SetInterface(
         plant::Redon(subject, seed + static_cast<std::uint64_t>(trial)).interface);
-    trials.push_back(RunTrial(board, PaperSine(amplitude_deg), trial == 0));
+    trials.push_back(
+        RunTrial(board, PaperSine(amplitude_deg, 5, frequency_hz), trial == 0));
   }
   return SummariseRepeatability(std::move(trials));
 }
@@ -376,7 +378,7 @@ SubjectSweep SummariseSweep(const std::string& subject,
 SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subject,
                                const std::vector<double>& amplitudes_deg,
                                const ProgressFn& progress, double progress_from,
-                               double progress_to) {
+                               double progress_to, double frequency_hz) {
   board.plant().SetInterface(subject.interface);
   std::vector<AmplitudePoint> points;
   for (std::size_t i = 0; i < amplitudes_deg.size(); ++i) {
@@ -387,10 +389,82 @@ SubjectSweep RunAmplitudeSweep(SimBoard& board, const plant::PlantParams& subjec
                progress_from + (progress_to - progress_from) * static_cast<double>(i) /
                                    static_cast<double>(amplitudes_deg.size()));
     }
-    points.push_back(SummarisePoint(a, RunTrial(board, PaperSine(a), false)));
+    points.push_back(
+        SummarisePoint(a, RunTrial(board, PaperSine(a, 5, frequency_hz), false)));
   }
   SubjectSweep out = SummariseSweep(subject.name, std::move(points));
-  out.truth = TrueInterface(subject.interface, kPaperFrequencyHz);
+  out.truth = TrueInterface(subject.interface, frequency_hz);
+  out.frequency_hz = frequency_hz;
+  return out;
+}
+
+IdentifiedAttachment IdentifyAttachment(const SubjectSweep& sweep,
+                                        double min_amplitude_deg) {
+  std::vector<double> k, b, offset;
+  for (const AmplitudePoint& p : sweep.points) {
+    if (p.amplitude_deg < min_amplitude_deg) continue;
+    for (const WindowOutcome& w : p.flexions) {
+      if (!w.fit_valid) continue;
+      k.push_back(w.stiffness);
+      b.push_back(w.damping);
+      offset.push_back(w.offset);
+    }
+  }
+  return {host::Describe(k), host::Describe(b), host::Describe(offset)};
+}
+
+plant::InterfaceParams ModelInterface(const IdentifiedAttachment& identified,
+                                      const plant::PlantParams& robot) {
+  if (identified.stiffness.n == 0) {
+    throw std::invalid_argument(
+        "no attachment fit to build a model from: no valid fit at the amplitudes used");
+  }
+  plant::InterfaceParams i;
+  i.present = true;
+  i.model = plant::InterfaceModel::kKelvinVoigt;
+  i.stiffness_Nm_per_rad = std::max(identified.stiffness.mean, 0.0);
+  i.damping_Nm_s_per_rad =
+      std::max(identified.damping.mean - robot.joint.viscous_Nm_s_per_rad, 0.0);
+  i.preload_Nm = identified.offset.mean;
+  return i;
+}
+
+ModelComparison CompareWithModel(const SubjectSweep& measured,
+                                 const SubjectSweep& predicted,
+                                 const IdentifiedAttachment& identified,
+                                 const plant::InterfaceParams& model) {
+  if (measured.points.size() != predicted.points.size()) {
+    throw std::invalid_argument("the model's sweep has other amplitudes");
+  }
+  ModelComparison out;
+  out.subject = measured.subject;
+  out.identified = identified;
+  out.model = model;
+  std::vector<double> load, unload, net, mload, munload, mnet;
+  for (std::size_t i = 0; i < measured.points.size(); ++i) {
+    const AmplitudePoint& m = measured.points[i];
+    const AmplitudePoint& p = predicted.points[i];
+    if (m.amplitude_deg != p.amplitude_deg) {
+      throw std::invalid_argument("the model's sweep has other amplitudes");
+    }
+    out.points.push_back({m.amplitude_deg, m.load, m.unload, m.net, p.truth_load.mean,
+                          p.truth_unload.mean, p.truth_net.mean});
+    load.push_back(m.load.mean);
+    unload.push_back(m.unload.mean);
+    net.push_back(m.net.mean);
+    mload.push_back(p.truth_load.mean);
+    munload.push_back(p.truth_unload.mean);
+    mnet.push_back(p.truth_net.mean);
+  }
+  const auto nrmse = [](const std::vector<double>& a, const std::vector<double>& b,
+                        double* rmse) {
+    *rmse = host::Rmse(a, b);
+    const double range = host::Range(b);
+    return range > 0 ? 100.0 * *rmse / range : 0.0;
+  };
+  out.nrmse_load = nrmse(load, mload, &out.rmse_load);
+  out.nrmse_unload = nrmse(unload, munload, &out.rmse_unload);
+  out.nrmse_net = nrmse(net, mnet, &out.rmse_net);
   return out;
 }
 
@@ -414,7 +488,8 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
         SimBoard board(params, config);
         board.app().SetCalibration(record);
         board.Tick();
-        out[i] = RunTrial(board, PaperSine(spec.amplitude_deg), spec.keep_trace);
+        out[i] = RunTrial(board, PaperSine(spec.amplitude_deg, 5, spec.frequency_hz),
+                          spec.keep_trace);
       } catch (...) {
         errors[i] = std::current_exception();
       }

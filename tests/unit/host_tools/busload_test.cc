@@ -88,4 +88,12 @@ TEST(BusLoad, EightBoardsBatchedAtOneKilohertzByHand) {
               (0.5 - 0.0453568) / (8 * 137.8e-6 / 5), 1e-6);
 }
 
+TEST(BusLoad, BenchFiguresAreTheHandComputedLoads) {
+  // The two cases worked by hand above, as ./bench prints them: 0.2658368 of FD
+  // 1/5 Mbit/s, and 365.556 Hz within half of classical 1 Mbit/s.
+  EXPECT_EQ(host::BusLoadFigures(),
+            "busload_8x1khz_fd_pct: 26.58 %\n"
+            "classic_1m_max_telemetry_hz: 366 Hz\n");
+}
+
 }  // namespace

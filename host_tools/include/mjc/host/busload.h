@@ -85,4 +85,10 @@ inline std::string FormatBusLoad(const BusLoad& load, const BusTiming& timing,
 // 50 % budget.
 std::string BusLoadReport(int boards, double nominal_bps, double data_bps);
 
+// ./bench's bus-load figures, one "name: value unit" line each (README, Benchmarks):
+// busload_8x1khz_fd_pct, the worst-case load of 8 boards at the default rates on CAN FD
+// 1/5 Mbit/s (angles batched), and classic_1m_max_telemetry_hz, the highest
+// angle-telemetry rate 8 boards keep within 50 % of classical CAN at 1 Mbit/s.
+std::string BusLoadFigures();
+
 }  // namespace mjc::host

@@ -166,8 +166,18 @@ class JointApp {
   };
 
   CommandOutcome Submit(const Request& request);
-  // The checks every start shares: idle, and calibrated unless it is the sweep. The
-  // main loop's (on the last tick's snapshot) and the tick's (on its own state).
+  // A request that carries nothing but its kind and tag (stop, clear faults).
+  CommandOutcome Submit(RequestKind kind, RequestTag tag);
+  // Submits a `kind` request carrying `value` in `field` if the board admits it
+  // (`admitted`, CheckStart's) and the request's own validation found nothing (`error`);
+  // otherwise the first refusal of the two.
+  template <class Error, class T>
+  CommandOutcome SubmitValid(const CommandOutcome& admitted, Error error,
+                             RequestKind kind, RequestTag tag, T Request::*field,
+                             const T& value);
+  // The checks every start shares: idle, and calibrated unless it is the sweep (idle
+  // alone is also what a configuration or a calibration needs). The main loop's (on
+  // the last tick's snapshot) and the tick's (on its own state).
   static CommandOutcome CheckStart(bool needs_calibration, BoardState state,
                                    bool calibrated);
   CommandOutcome CheckStart(bool needs_calibration) const;
