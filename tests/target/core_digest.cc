@@ -82,6 +82,17 @@ void HashControlTicks(Fnv1a& h, vt::Rng& rng, std::uint32_t ticks) {
       h.Add(w.eta_percent.raw());
       h.Add(w.peak_power.raw());
       h.Add(w.peak_torque.raw());
+      // The window's fit sums: their 96-bit adds take another path on the Cortex-M4.
+      const InterfaceFitSums& f = r.window_fit;
+      h.Add(f.count);
+      h.Add(f.theta);
+      h.Add(f.omega);
+      h.Add(f.tau);
+      for (const Wide96* sum : {&f.theta_theta, &f.theta_omega, &f.omega_omega,
+                                &f.theta_tau, &f.omega_tau, &f.tau_tau}) {
+        h.Add(sum->high());
+        h.Add(sum->low());
+      }
     }
   }
 }

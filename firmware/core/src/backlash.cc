@@ -19,17 +19,6 @@ Angle BacklashModel::Reset(Angle motor, Angle joint) {
   return state_->output;
 }
 
-Angle BacklashModel::Update(Angle motor) {
-  if (!state_->initialized) {
-    // No joint reading to start from: the middle of the band.
-    const Angle lo = LowerEdge(motor);
-    const Angle hi = UpperEdge(motor);
-    return Reset(motor, Angle::FromRaw(lo.raw() + (hi - lo).raw() / 2));
-  }
-  state_->output = Clamp(state_->output, LowerEdge(motor), UpperEdge(motor));
-  return state_->output;
-}
-
 InverseBacklash::InverseBacklash(const BacklashConfig* config, State* state)
     : config_(config), state_(state) {
   Configure();

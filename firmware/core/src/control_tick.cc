@@ -3,29 +3,12 @@
 #include <span>
 
 namespace mjc {
-namespace {
-
-// The segment and its repetition travel through one delay line as one word.
-std::int32_t PackSegment(Segment s, std::uint16_t repetition) {
-  return static_cast<std::int32_t>((static_cast<std::uint32_t>(repetition) << 8) |
-                                   static_cast<std::uint32_t>(s));
-}
-Segment UnpackSegment(std::int32_t word) {
-  return static_cast<Segment>(static_cast<std::uint32_t>(word) & 0xFFu);
-}
-std::uint16_t UnpackRepetition(std::int32_t word) {
-  return static_cast<std::uint16_t>(static_cast<std::uint32_t>(word) >> 8);
-}
-
-}  // namespace
 
 ControlTick::ControlTick()
     : motor_encoder_(&config_.motor_encoder, &motor_state_),
       backlash_(&config_.backlash, &backlash_state_),
       inverse_(&config_.backlash, &inverse_state_),
       estimator_(window_storage_),
-      torque_delay_(std::span<std::int32_t>{}),
-      segment_delay_(std::span<std::int32_t>{}),
       windows_(config_.tick_hz),
       loop_(&config_.position, &loop_state_),
       supervisor_(&config_.supervisor, &supervisor_state_) {
@@ -83,9 +66,6 @@ ControlConfigError ControlTick::Configure(const ControlConfig& config) {
   motor_encoder_.Reconfigure();
   inverse_.Configure();
   loop_.Configure();
-  const std::size_t delay = estimator_.delay_ticks();
-  torque_delay_ = DelayLine(std::span<std::int32_t>(torque_storage_.data(), delay));
-  segment_delay_ = DelayLine(std::span<std::int32_t>(segment_storage_.data(), delay));
   windows_ = WindowTracker(config_.tick_hz);
   trajectory_ = TrajectoryGenerator(config_.tick_hz);
   Restart();
@@ -100,8 +80,8 @@ void ControlTick::Restart() {
   supervisor_state_.Clear();
   windows_.Clear();
   energy_.Clear();
-  last_duty_ = Duty{};
-  last_error_ = Angle{};
+  supervised_.applied_duty = Duty{};
+  supervised_.motor_error = Angle{};
 }
 
 void ControlTick::Arm(bool armed) {
@@ -123,51 +103,54 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   const JointSample joint_sample =
       DecodeJointFrame(sample.joint_frame, config_.joint_encoder);
   if (joint_sample.status == JointFrameStatus::kOk) {
-    joint_ = joint_sample.angle;
-    joint_count_ = joint_sample.count;
+    supervised_.joint = joint_sample.angle;
+    supervised_.joint_count = joint_sample.count;
   }
   if (!started_) {
-    backlash_.Reset(motor, joint_);
-    estimator_.Reset(joint_);
-    torque_delay_.Fill(0);
-    segment_delay_.Fill(PackSegment(Segment::kIdle, 0));
+    backlash_.Reset(motor, supervised_.joint);
+    estimator_.Reset(supervised_.joint);
+    // Every slot of the ring in use (the estimator's delay, >= 16 ticks: Validate).
+    for (std::size_t i = 0; i < estimator_.delay_ticks(); ++i) {
+      delayed_[i] = {.torque = 0, .segment = Segment::kIdle, .repetition = 0};
+    }
+    delayed_next_ = 0;
     started_ = true;
   }
 
   // 2. Cable side and SEA torque (eqs. 4, 5).
   const Angle cable = backlash_.Update(motor);
-  const Torque torque = Mul<Torque>(config_.sea_stiffness, cable - joint_);
+  const Torque torque = Mul<Torque>(config_.sea_stiffness, cable - supervised_.joint);
 
   // 3.–4. Aligned velocity, torque and segment; power and energy (eq. 3).
-  const AngularVelocity velocity = estimator_.Update(joint_);
-  const Torque aligned_torque = Torque::FromRaw(torque_delay_.Push(torque.raw()));
+  const AngularVelocity velocity = estimator_.Update(supervised_.joint);
+  Delayed& delayed = delayed_[delayed_next_];
+  const Torque aligned_torque = Torque::FromRaw(delayed.torque);
+  delayed.torque = torque.raw();
   const Power power = Mul<Power>(aligned_torque, velocity);
   energy_.Add(power);
 
-  // 5. Supervisor, before any duty is computed.
-  // Every field named: a default-initialised SupervisorInput then filled in cost a
-  // memset of the whole struct each tick (51 instructions on Cortex-M4).
-  const SupervisorInput in{.joint_status = joint_sample.status,
-                           .joint_count = joint_count_,
-                           .joint = joint_,
-                           .motor_count = motor_encoder_.extended_count(),
-                           .motor = motor,
-                           .torque = torque,
-                           .joint_velocity = velocity,
-                           .applied_duty = last_duty_,
-                           .motor_error = last_error_,
-                           .tick_overrun = sample.tick_overrun,
-                           .external = external_fault_};
-  external_fault_ = Fault::kNone;
+  // 5. Supervisor, before any duty is computed. Its input lives in the tick
+  // (supervised_): what persists between ticks is written where it changes (the last
+  // good joint reading above, the duty and its error below, an external fault when
+  // raised), so only this tick's readings are stored here; a SupervisorInput built
+  // whole each tick cost 8 Cortex-M4 instructions more (tick_instructions_cm4).
+  supervised_.joint_status = joint_sample.status;
+  supervised_.motor_count = motor_encoder_.extended_count();
+  supervised_.motor = motor;
+  supervised_.torque = torque;
+  supervised_.joint_velocity = velocity;
+  supervised_.tick_overrun = sample.tick_overrun;
   r.clear = FaultClear::kNone;
   if (clear_requested_) {
     clear_requested_ = false;
     if (!supervisor_.bridge_enabled()) {
-      r.clear = supervisor_.Clear(in) ? FaultClear::kCleared : FaultClear::kRefused;
+      r.clear =
+          supervisor_.Clear(supervised_) ? FaultClear::kCleared : FaultClear::kRefused;
     }
   }
   const bool was_healthy = supervisor_.bridge_enabled();
-  const Fault fault = supervisor_.Check(tick_, in);
+  const Fault fault = supervisor_.Check(tick_, supervised_);
+  supervised_.external = Fault::kNone;  // an event: this tick's checks saw it
   if (was_healthy && fault != Fault::kNone) {
     r.raised = fault;
     trajectory_.Stop();
@@ -175,12 +158,15 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
 
   // 6. Trajectory and position loop.
   const TrajectoryPoint point = trajectory_.Step();
-  const std::int32_t segment_word =
-      segment_delay_.Push(PackSegment(point.segment, point.repetition));
+  const Segment aligned_segment = delayed.segment;
+  const std::uint16_t aligned_repetition = delayed.repetition;
+  delayed.segment = point.segment;
+  delayed.repetition = point.repetition;
+  delayed_next_ = delayed_next_ + 1 == estimator_.delay_ticks() ? 0 : delayed_next_ + 1;
   const std::uint32_t aligned_tick = tick_ - estimator_.delay_ticks();
-  r.window_completed = windows_.Update(
-      aligned_tick, UnpackSegment(segment_word), UnpackRepetition(segment_word), power,
-      aligned_torque, estimator_.centre(), velocity, &r.window, &r.window_fit);
+  r.window_completed = windows_.Update(aligned_tick, aligned_segment, aligned_repetition,
+                                       power, aligned_torque, estimator_.centre(),
+                                       velocity, &r.window, &r.window_fit);
 
   const Angle setpoint =
       config_.backlash_compensation ? inverse_.Command(point.position) : point.position;
@@ -191,13 +177,13 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   } else {
     loop_state_.Clear();
   }
-  last_duty_ = duty;
-  last_error_ = enabled ? setpoint - motor : Angle{};
+  supervised_.applied_duty = duty;
+  supervised_.motor_error = enabled ? setpoint - motor : Angle{};
   r.actuation = {duty, enabled};
 
   t.tick = tick_;
   t.motor = motor;
-  t.joint = joint_;
+  t.joint = supervised_.joint;
   t.cable_side = cable;
   t.torque = torque;
   t.setpoint = setpoint;

@@ -89,34 +89,27 @@ static_assert(LsbPerCountQ32(7, 1, 1) != 0);
 static_assert(LsbPerCountQ32(6, 1, 1) == 0);
 
 // Angle for the signed count c = direction · (count − offset), given a valid scale.
-Angle ScaledCountToAngle(std::int64_t c, const MotorEncoderScale& scale) {
-  if (c > scale.count_limit) return Angle::Max();
-  if (c < -scale.count_limit) return Angle::Min();
+[[gnu::always_inline]] inline Angle ScaledCountToAngle(std::int64_t c,
+                                                       const MotorEncoderScale& scale) {
+  // |c| <= count_limit by one unsigned test: count_limit < 2^31 (the scale is at least
+  // 2^32), and c + count_limit, taken mod 2^64, lies in [0, 2·count_limit] exactly
+  // then, and above it for every other int64 c (two signed 64-bit tests cost the tick
+  // 2 Cortex-M4 instructions more).
+  const auto limit = static_cast<std::uint32_t>(scale.count_limit);
+  if (static_cast<std::uint64_t>(c) + limit > std::uint64_t{2 * limit}) {
+    return c < 0 ? Angle::Min() : Angle::Max();
+  }
   // |c| · scale <= INT64_MAX by the choice of count_limit.
   const std::int64_t product = c * scale.lsb_per_count_q32;
-  return Angle::FromRaw(fixed_detail::SaturateTo<std::int32_t>(
-      fixed_detail::RoundingShiftRight(product, 32)));
+  // round(product / 2^32) = the high word plus bit 31 of the low word: above int32 only
+  // from a high word of INT32_MAX, which is also the saturated value (RoundingShiftRight
+  // and SaturateTo's, in 32 bits).
+  const auto high = static_cast<std::int32_t>(product >> 32);
+  const auto half =
+      static_cast<std::int32_t>((static_cast<std::uint64_t>(product) >> 31) & 1u);
+  return Angle::FromRaw(high == std::numeric_limits<std::int32_t>::max() ? high
+                                                                         : high + half);
 }
-
-// Even parity over all 16 bits: true when the number of 1 bits is even. XOR folding
-// rather than std::popcount, which is a library call on Cortex-M4.
-constexpr bool HasEvenParity(std::uint16_t word) {
-  std::uint32_t x = word;
-  x ^= x >> 8;
-  x ^= x >> 4;
-  x ^= x >> 2;
-  x ^= x >> 1;
-  return (x & 1u) == 0;
-}
-
-// round(2π/16384 · 2^24 · 2^37) = round(2π · 2^47): the joint scale in Angle LSB a count,
-// Q37. |c| ≤ 8192 = 2^13 and the constant is below 2^50, so c · constant fits int64.
-// The constant's rounding (≤ 0.5 in Q37) moves an angle by at most 8192 · 2^-38 = 3e-8
-// LSB, and no exact angle c · 2π · 2^10 lies that close to a rounding tie (checked for
-// all 16384 counts by the test vectors), so every angle is the correctly rounded one.
-constexpr std::int64_t kJointLsbPerCountQ37 = 884279719003555;
-constexpr int kJointScaleShift = 37;
-static_assert(kJointLsbPerCountQ37 < (std::int64_t{1} << 50));
 
 }  // namespace
 
@@ -152,6 +145,34 @@ MotorEncoderConfigError ComputeMotorEncoderScale(const MotorEncoderConfig& confi
 
 void MotorEncoderState::Clear() { *this = MotorEncoderState{}; }
 
+// CountToAngle's body, inlined into each tick's Update (GCC kept a call to a clone of
+// CountToAngle there).
+[[gnu::always_inline]] inline Angle MotorEncoder::AngleOf(
+    std::int64_t extended_count) const {
+  if (config_error_ != MotorEncoderConfigError::kOk) return Angle{};
+  // Saturating subtraction: a far-away offset gives a saturated angle, not UB.
+  std::int64_t c = 0;
+  if (__builtin_sub_overflow(extended_count, zero_offset_counts_, &c)) {
+    c = extended_count < 0 ? std::numeric_limits<std::int64_t>::min()
+                           : std::numeric_limits<std::int64_t>::max();
+  }
+  if (direction_ < 0) {
+    c = c == std::numeric_limits<std::int64_t>::min()
+            ? std::numeric_limits<std::int64_t>::max()
+            : -c;
+  }
+  return ScaledCountToAngle(c, scale_);
+}
+
+// Inlined into Update, with AngleOf: as calls they cost the tick 4 Cortex-M4
+// instructions more (tick_instructions_cm4).
+[[gnu::always_inline]] inline void MotorEncoder::StoreAngle() {
+  state_->angle = AngleOf(state_->extended_count);
+  // Max or Min: the two raw values whose sum with 2^31 + 1 is 0 or 1, mod 2^32.
+  state_->angle_saturated =
+      static_cast<std::uint32_t>(state_->angle.raw()) + 0x80000001u <= 1u;
+}
+
 MotorEncoder::MotorEncoder(const MotorEncoderConfig* config, MotorEncoderState* state)
     : config_(config), state_(state) {
   Reconfigure();
@@ -182,25 +203,7 @@ Angle MotorEncoder::Update(std::uint16_t count) {
 }
 
 Angle MotorEncoder::CountToAngle(std::int64_t extended_count) const {
-  if (config_error_ != MotorEncoderConfigError::kOk) return Angle{};
-  // Saturating subtraction: a far-away offset gives a saturated angle, not UB.
-  std::int64_t c = 0;
-  if (__builtin_sub_overflow(extended_count, zero_offset_counts_, &c)) {
-    c = extended_count < 0 ? std::numeric_limits<std::int64_t>::min()
-                           : std::numeric_limits<std::int64_t>::max();
-  }
-  if (direction_ < 0) {
-    c = c == std::numeric_limits<std::int64_t>::min()
-            ? std::numeric_limits<std::int64_t>::max()
-            : -c;
-  }
-  return ScaledCountToAngle(c, scale_);
-}
-
-void MotorEncoder::StoreAngle() {
-  state_->angle = CountToAngle(state_->extended_count);
-  state_->angle_saturated =
-      state_->angle == Angle::Max() || state_->angle == Angle::Min();
+  return AngleOf(extended_count);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -217,39 +220,10 @@ JointEncoderConfigError ValidateJointEncoderConfig(const JointEncoderConfig& con
   return JointEncoderConfigError::kOk;
 }
 
-Angle JointCountToAngle(std::uint16_t count, const JointEncoderConfig& config) {
-  // (count − offset) mod 16384 through unsigned wrap, then into [-8192, 8192).
-  const std::uint32_t delta =
-      (std::uint32_t{count} - std::uint32_t{config.zero_offset}) & kJointFrameCountMask;
-  std::int32_t c = static_cast<std::int32_t>(delta);
-  if (c >= kJointCountsPerRev / 2) c -= kJointCountsPerRev;
-  if (config.direction < 0) c = -c;
-  const std::int64_t product = std::int64_t{c} * kJointLsbPerCountQ37;
-  // |c · 2π/16384| ≤ π rad: far inside Angle's range, the cast cannot truncate.
-  return Angle::FromRaw(static_cast<std::int32_t>(
-      fixed_detail::RoundingShiftRight(product, kJointScaleShift)));
-}
-
-JointSample DecodeJointFrame(std::uint16_t frame, const JointEncoderConfig& config) {
-  JointSample sample;
-  if (!HasEvenParity(frame)) {
-    sample.status = JointFrameStatus::kParityError;
-    return sample;
-  }
-  if ((frame & kJointFrameErrorFlagBit) != 0) {
-    sample.status = JointFrameStatus::kErrorFlag;
-    return sample;
-  }
-  sample.status = JointFrameStatus::kOk;
-  sample.count = static_cast<std::uint16_t>(frame & kJointFrameCountMask);
-  sample.angle = JointCountToAngle(sample.count, config);
-  return sample;
-}
-
 std::uint16_t EncodeJointFrame(std::uint16_t count, bool error_flag) {
   std::uint16_t frame = static_cast<std::uint16_t>(count & kJointFrameCountMask);
   if (error_flag) frame = static_cast<std::uint16_t>(frame | kJointFrameErrorFlagBit);
-  if (!HasEvenParity(frame)) {
+  if (!encoder_detail::HasEvenParity(frame)) {
     frame = static_cast<std::uint16_t>(frame | kJointFrameParityBit);
   }
   return frame;

@@ -263,21 +263,6 @@ std::uint32_t TrajectoryGenerator::rest_ticks() const {
   return oscillating ? rest_ticks_ : 0u;
 }
 
-TrajectoryPoint TrajectoryGenerator::Step() {
-  switch (mode_) {
-    case TrajectoryMode::kSine:
-    case TrajectoryMode::kSweep:
-      return StepOscillation();
-    case TrajectoryMode::kStream:
-      return StepStream();
-    case TrajectoryMode::kHold:
-      return {position_, AngularVelocity{}, Segment::kHold, 0, false};
-    case TrajectoryMode::kIdle:
-      break;
-  }
-  return {position_, AngularVelocity{}, Segment::kIdle, repetition_, true};
-}
-
 TrajectoryPoint TrajectoryGenerator::StepOscillation() {
   if (stage_ == Stage::kLeadingRest) {
     if (rest_left_ > 0) {
@@ -290,14 +275,22 @@ TrajectoryPoint TrajectoryGenerator::StepOscillation() {
   if (stage_ == Stage::kCycling) {
     const std::uint32_t phase = (quadrant_ << 30) | phase_offset_;
     const auto [sine, cosine] = SinCos(phase);
-    const TrajectoryPoint point{
-        neutral_ + Mul<Angle>(Angle::FromRaw(amplitude_.value()), sine),
-        ramping_ ? Mul<AngularVelocity>(AngularVelocity::FromRaw(peak_velocity_.value()),
-                                        cosine) +
-                       Mul<AngularVelocity>(amplitude_rate_, sine)
-                 : Mul<AngularVelocity>(AngularVelocity::FromRaw(peak_velocity_.value()),
-                                        cosine),
-        kQuadrantSegment[quadrant_], repetition_, false};
+    // No saturation on this path. |sin|, |cos| <= 1 (2^30 raw), so each rounded
+    // product is at most its other factor in magnitude: A <= kMaxTrajectoryAmplitude,
+    // and validation bounded neutral ± A to Angle's range and the peak velocity plus
+    // |dA/dt| to AngularVelocity's (ValidateOscillation; both ramps stay between their
+    // validated ends).
+    const auto position =
+        Angle::FromRaw(neutral_.raw() +
+                       MulInRange<Angle>(Angle::FromRaw(amplitude_.value()), sine).raw());
+    const auto peak = AngularVelocity::FromRaw(peak_velocity_.value());
+    const AngularVelocity velocity =
+        ramping_ ? AngularVelocity::FromRaw(
+                       MulInRange<AngularVelocity>(peak, cosine).raw() +
+                       MulInRange<AngularVelocity>(amplitude_rate_, sine).raw())
+                 : MulInRange<AngularVelocity>(peak, cosine);
+    const TrajectoryPoint point{position, velocity, kQuadrantSegment[quadrant_],
+                                repetition_, false};
     AdvanceCycle();
     position_ = point.position;
     return point;
@@ -312,7 +305,8 @@ TrajectoryPoint TrajectoryGenerator::StepOscillation() {
   return {neutral_, AngularVelocity{}, Segment::kIdle, repetition_, true};
 }
 
-void TrajectoryGenerator::AdvanceCycle() {
+// Inlined: one call fewer each tick (see Step in the header for what it saved).
+[[gnu::always_inline]] inline void TrajectoryGenerator::AdvanceCycle() {
   if (ramping_) {  // a sine's amplitude is constant: nothing to advance
     amplitude_.Advance();
     peak_velocity_.Advance();

@@ -49,6 +49,27 @@ TEST(MulShiftRound, MatchesInt128ReferenceOverWholeRange) {
   }
 }
 
+TEST(MulShiftRound, UnsignedMultiplierMatchesInt128Reference) {
+  mjc::vt::Rng rng(92);
+  for (int shift = 32; shift <= 62; ++shift) {
+    for (int i = 0; i < 20000; ++i) {
+      const std::int64_t a = rng.NextI64() >> (rng.Next() % 40u);
+      const auto m = static_cast<std::int32_t>(
+          static_cast<std::uint32_t>(rng.NextI32()) >> (1 + rng.Next() % 31u));
+      ASSERT_EQ(mjc::MulShiftRoundUnsigned(a, static_cast<std::uint32_t>(m), shift),
+                Reference(a, m, shift))
+          << a << " * " << m << " >> " << shift;
+    }
+    const std::int32_t kMax = std::numeric_limits<std::int32_t>::max();
+    for (const std::int64_t a :
+         {std::numeric_limits<std::int64_t>::min(),
+          std::numeric_limits<std::int64_t>::max(), std::int64_t{-1}}) {
+      ASSERT_EQ(mjc::MulShiftRoundUnsigned(a, static_cast<std::uint32_t>(kMax), shift),
+                Reference(a, kMax, shift));
+    }
+  }
+}
+
 TEST(MulShiftRound, TiesRoundTowardPlusInfinity) {
   EXPECT_EQ(mjc::MulShiftRound(std::int64_t{1} << 31, 1, 32), 1);     // 0.5 -> 1
   EXPECT_EQ(mjc::MulShiftRound(-(std::int64_t{1} << 31), 1, 32), 0);  // -0.5 -> 0

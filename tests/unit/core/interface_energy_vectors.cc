@@ -8,6 +8,7 @@
 // so η = 2x/(1 + x) with x = bωπ/(2k); a purely elastic interface (b = 0) gives η = 0.
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 
 #include "mjc/core/encoder.h"
@@ -35,6 +36,45 @@ MJC_VECTOR_TEST(EnergyScale, SumToJoulesWithinHalfLsb) {
     worst = e > worst ? e : worst;
   }
   VT_EXPECT_LE(worst, 0.5);
+}
+
+// The window fit's 96-bit sums on both targets (on the Cortex-M4 the int64 part's
+// overflows are read from the V flag of an ADCS, on the host from
+// __builtin_add_overflow), against a reference kept as two 64-bit sums of the
+// products' 32-bit words. Full-scale random products make the int64 part overflow
+// both ways many times.
+MJC_VECTOR_TEST(Wide96, MatchesWordSumsAcrossOverflows) {
+  mjc::vt::Rng rng(961);
+  Wide96 w;
+  std::uint64_t low_words = 0;  // Σ v mod 2^32
+  std::int64_t high_words = 0;  // Σ floor(v / 2^32)
+  int mismatches = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const std::int32_t a = rng.NextI32() >> (rng.Next() % 4u);
+    const std::int32_t b = rng.NextI32();
+    w.AddProduct(a, b);
+    const std::int64_t v = std::int64_t{a} * b;
+    low_words += static_cast<std::uint32_t>(static_cast<std::uint64_t>(v));
+    high_words += v >> 32;
+    const std::int64_t upper = high_words + static_cast<std::int64_t>(low_words >> 32);
+    const bool same = w.high() == static_cast<std::int32_t>(upper >> 32) &&
+                      w.low() == ((static_cast<std::uint64_t>(upper) << 32) |
+                                  (low_words & 0xFFFFFFFFu));
+    mismatches += same ? 0 : 1;
+  }
+  VT_EXPECT_EQ(mismatches, 0);
+  // Exact values: 4·2^62 = 2^64, then 8·(−2^31·(2^31 − 1)) = −2^65 + 2^34.
+  Wide96 exact;
+  for (int i = 0; i < 4; ++i)
+    exact.AddProduct(std::numeric_limits<std::int32_t>::min(),
+                     std::numeric_limits<std::int32_t>::min());
+  VT_EXPECT_EQ(exact.high(), 1);
+  VT_EXPECT_EQ(exact.low(), std::uint64_t{0});
+  for (int i = 0; i < 8; ++i)
+    exact.AddProduct(std::numeric_limits<std::int32_t>::min(),
+                     std::numeric_limits<std::int32_t>::max());
+  VT_EXPECT_EQ(exact.high(), -1);
+  VT_EXPECT_EQ(exact.low(), std::uint64_t{1} << 34);
 }
 
 MJC_VECTOR_TEST(EnergyAccumulator, FullScaleDayDoesNotOverflow) {

