@@ -17,8 +17,9 @@ namespace mjc::sim {
 
 class SimBoard {
  public:
-  // `port` and `flash` as for JointBoard: null for a board without a bus (the paper's
-  // scenarios drive the app directly) or without persistence.
+  // `port` and `flash` as for JointBoard: null for a board without a bus (rigs that
+  // drive the app directly; the paper's scenarios go through sim::BusBoard) or without
+  // persistence.
   SimBoard(const plant::PlantParams& params, const app::JointBoardConfig& config,
            hal::CanPort* port = nullptr, hal::Flash* flash = nullptr);
   SimBoard(const plant::PlantParams& params, const ControlConfig& config)
