@@ -288,24 +288,11 @@ void AddCalibrate(CLI::App& app) {
                       " malformed): not fitting it; rerun the sweep on a quieter bus");
       }
 
-      host::BacklashFitOptions options;
-      options.fit_lag = true;
-      options.sample_rate_hz = *rate_hz;
-      if (robot) {
-        host::UseRobotAlpha(*robot, fit_alpha, &options);
-        // Recorded with the zero the board holds; fitted as with the joint's own.
-        const double shift = host::JointZeroShift(held->record.joint_zero_count, *robot);
-        for (double& j : joint) j += shift;
-      }
-      const host::BacklashFit fit = host::FitBacklash(motor, joint, options);
-      const auto config = host::ToFirmwareConfig(fit, &why);
-      if (!config) throw Failure("fit not usable: " + why);
-      CalibrationRecord record = held->record;
-      record.backlash = *config;
-      if (robot) host::UseRobotJoint(*robot, &record);
-      record.fit_rms_urad =
-          static_cast<std::uint32_t>(std::lround(fit.rms_error_rad * 1e6));
-      record.fit_lag_us = static_cast<std::uint32_t>(std::lround(fit.lag_s * 1e6));
+      const host::SweepCalibration fitted = host::FitSweep(
+          motor, joint, *rate_hz, held->record, robot ? &*robot : nullptr, fit_alpha);
+      const host::BacklashFit& fit = fitted.fit;
+      if (!fitted.record) throw Failure("fit not usable: " + fitted.why);
+      CalibrationRecord record = *fitted.record;
       record.fitted_at_unix_s = static_cast<std::uint64_t>(std::time(nullptr));
       std::printf(
           "fit over %zu samples at %d Hz: c_r %.4f°, c_l %.4f°, lag %.2f ms, rms %.4f°, "

@@ -282,6 +282,35 @@ UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
   return out;
 }
 
+SweepCalibration FitSweep(std::span<const double> motor_rad,
+                          std::vector<double> joint_rad, double rate_hz,
+                          const protocol::CalibrationRecord& held,
+                          const RobotDescription* robot, bool fit_alpha) {
+  // The joint trails the cable side by a few ms on the robot alone (the SEA spring
+  // against the joint's damping): fit that lag too, or it reads as extra slack.
+  BacklashFitOptions options;
+  options.fit_lag = true;
+  options.sample_rate_hz = rate_hz;
+  if (robot != nullptr) {
+    UseRobotAlpha(*robot, fit_alpha, &options);
+    // Recorded with the zero the board holds; fitted as with the joint's own.
+    const double shift = JointZeroShift(held.joint_zero_count, *robot);
+    for (double& j : joint_rad) j += shift;
+  }
+  SweepCalibration out;
+  out.fit = FitBacklash(motor_rad, joint_rad, options);
+  const auto backlash = ToFirmwareConfig(out.fit, &out.why);
+  if (!backlash) return out;
+  protocol::CalibrationRecord record = held;
+  record.backlash = *backlash;
+  if (robot != nullptr) UseRobotJoint(*robot, &record);
+  record.fit_rms_urad =
+      static_cast<std::uint32_t>(std::lround(out.fit.rms_error_rad * 1e6));
+  record.fit_lag_us = static_cast<std::uint32_t>(std::lround(out.fit.lag_s * 1e6));
+  out.record = record;
+  return out;
+}
+
 std::optional<BoardCalibration> ReadCalibration(BoardClient& board, std::string* why) {
   using protocol::ParamId;
   std::int32_t value[6] = {};

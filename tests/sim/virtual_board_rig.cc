@@ -115,20 +115,15 @@ CalibrationRun SweepAndFit(host::BoardClient& client, const protocol::SweepConfi
     return run;
   }
 
-  host::BacklashFitOptions options;
-  options.fit_lag = true;
-  options.sample_rate_hz = *rate_hz;
-  run.fit = host::FitBacklash(motor, joint, options);
-  const auto backlash = host::ToFirmwareConfig(run.fit, &why);
-  if (!backlash) {
-    run.error = "fit not usable: " + why;
+  // Fitted and made into the record as `mjc calibrate` does (no robot description).
+  host::SweepCalibration fitted =
+      host::FitSweep(motor, std::move(joint), *rate_hz, held->record, nullptr, false);
+  run.fit = fitted.fit;
+  if (!fitted.record) {
+    run.error = "fit not usable: " + fitted.why;
     return run;
   }
-  run.record = held->record;
-  run.record.backlash = *backlash;
-  run.record.fit_rms_urad =
-      static_cast<std::uint32_t>(std::lround(run.fit.rms_error_rad * 1e6));
-  run.record.fit_lag_us = static_cast<std::uint32_t>(std::lround(run.fit.lag_s * 1e6));
+  run.record = *fitted.record;
   run.error_right_deg = host::RadToDeg(run.fit.c_right_rad - plant.cable.c_right_rad);
   run.error_left_deg = host::RadToDeg(run.fit.c_left_rad - plant.cable.c_left_rad);
   return run;

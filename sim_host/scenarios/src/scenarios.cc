@@ -158,37 +158,21 @@ CalibrationOutcome RunCalibration(BusBoard& bus, const RampedSineConfig& sweep,
     out.message = "malformed angle frames during the sweep: not fitting it";
     return out;
   }
-  // The joint trails the cable side by a few ms on the robot alone (the SEA spring
-  // against the joint's damping): fit that lag too, or it reads as extra slack.
-  host::BacklashFitOptions options;
-  options.fit_lag = true;
-  options.sample_rate_hz = *rate_hz;
-  if (joint_of.robot != nullptr) {
-    host::UseRobotAlpha(*joint_of.robot, joint_of.fit_alpha, &options);
-    // Recorded with the zero the board holds; fitted as with the joint's own.
-    const double shift =
-        host::JointZeroShift(held->record.joint_zero_count, *joint_of.robot);
-    for (double& j : joint) j += shift;
-  }
-  out.fit = host::FitBacklash(motor, joint, options);
+  // Fitted and made into the record as `mjc calibrate` does (host::FitSweep). No
+  // fitted_at: a simulated run has no date, and its outputs are the same every run.
+  host::SweepCalibration fitted =
+      host::FitSweep(motor, std::move(joint), *rate_hz, held->record, joint_of.robot,
+                     joint_of.fit_alpha);
+  out.fit = fitted.fit;
   out.error_right_deg =
       (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / std::numbers::pi;
   out.error_left_deg =
       (out.fit.c_left_rad - out.true_c_left_rad) * 180.0 / std::numbers::pi;
-  const auto backlash = host::ToFirmwareConfig(out.fit, &why);
-  if (!backlash) {
-    out.message = "calibration refused: " + why;
+  if (!fitted.record) {
+    out.message = "calibration refused: " + fitted.why;
     return out;
   }
-  // The backlash is what was fitted; stiffness and zero stay the board's unless the
-  // joint's description gives them. No fitted_at: a simulated run has no date, and
-  // its outputs are the same every run.
-  protocol::CalibrationRecord record = held->record;
-  record.backlash = *backlash;
-  if (joint_of.robot != nullptr) host::UseRobotJoint(*joint_of.robot, &record);
-  record.fit_rms_urad =
-      static_cast<std::uint32_t>(std::lround(out.fit.rms_error_rad * 1e6));
-  record.fit_lag_us = static_cast<std::uint32_t>(std::lround(out.fit.lag_s * 1e6));
+  const protocol::CalibrationRecord& record = *fitted.record;
   out.record = {record.backlash, record.sea_stiffness, record.joint_zero_count};
   const auto isotp = bus.Connect();
   const host::UploadOutcome sent =

@@ -7,6 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -153,6 +156,101 @@ TEST(CalibrationFile, ImplausibleValuesAreKeptWithAWarningEach) {
   warnings.clear();
   EXPECT_FALSE(CalibrationFromJson(j, &why, &warnings));
   EXPECT_NE(why.find("outside ±28.6°"), std::string::npos) << why;
+}
+
+// FitSweep: a calibration sweep to the record `mjc calibrate` uploads. The reference is
+// a play operator written here in double precision (θ̃ = clamp(θ̃, α(θ_m − c_r),
+// α(θ_m − c_l))) on an increasing-amplitude sweep at 1 kHz, as the board records it.
+struct SyntheticSweep {
+  std::vector<double> motor_rad, joint_rad;
+};
+
+SyntheticSweep PlaySweep(double c_right_rad, double c_left_rad, double alpha) {
+  SyntheticSweep s;
+  constexpr double kRateHz = 1000, kFrequencyHz = 0.5, kEndAmplitudeRad = 0.5;
+  constexpr int kCycles = 10;
+  const int n = static_cast<int>(kCycles / kFrequencyHz * kRateHz);
+  double held = 0;
+  for (int i = 0; i < n; ++i) {
+    const double t = i / kRateHz;
+    const double amplitude = kEndAmplitudeRad * (i + 1) / n;
+    const double motor = amplitude * std::sin(2 * std::numbers::pi * kFrequencyHz * t);
+    held = std::clamp(held, alpha * (motor - c_right_rad), alpha * (motor - c_left_rad));
+    s.motor_rad.push_back(motor);
+    s.joint_rad.push_back(held);
+  }
+  return s;
+}
+
+TEST(FitSweep, WithoutADescriptionTheBoardKeepsItsStiffnessAndZero) {
+  // Setup: a board holding K = 0.5 N·m/rad and zero count 321; the cable's slack.
+  const SyntheticSweep sweep = PlaySweep(1.2 * kDeg, -0.8 * kDeg, 1.0);
+  protocol::CalibrationRecord held;
+  held.sea_stiffness = Stiffness::FromDouble(0.5);
+  held.joint_zero_count = 321;
+  held.fitted_at_unix_s = 42;
+
+  // Exercise.
+  const SweepCalibration out =
+      FitSweep(sweep.motor_rad, sweep.joint_rad, 1000, held, nullptr, false);
+
+  // Verify: the slack to well inside a joint-encoder count (0.022°), α = 1, the
+  // board's own stiffness, zero and date; the fit's RMS and lag in the record.
+  ASSERT_TRUE(out.record) << out.why;
+  EXPECT_NEAR(out.record->backlash.c_right.ToDouble(), 1.2 * kDeg, 0.002 * kDeg);
+  EXPECT_NEAR(out.record->backlash.c_left.ToDouble(), -0.8 * kDeg, 0.002 * kDeg);
+  EXPECT_DOUBLE_EQ(out.record->backlash.alpha.ToDouble(), 1.0);
+  EXPECT_EQ(out.record->sea_stiffness, held.sea_stiffness);
+  EXPECT_EQ(out.record->joint_zero_count, 321);
+  EXPECT_EQ(out.record->fitted_at_unix_s, 42u);
+  EXPECT_EQ(out.record->fit_rms_urad,
+            static_cast<std::uint32_t>(std::lround(out.fit.rms_error_rad * 1e6)));
+  EXPECT_EQ(out.record->fit_lag_us,
+            static_cast<std::uint32_t>(std::lround(out.fit.lag_s * 1e6)));
+  EXPECT_LT(out.fit.rms_error_rad, 1e-5);
+}
+
+TEST(FitSweep, ADescriptionGivesAlphaStiffnessAndZeroAndShiftsTheAngles) {
+  // Setup: a joint with α = 1.25 (r_m 12.5 mm, r_j 10 mm) and its encoder zero at
+  // 1000 counts; the board still holds zero 900, so it measured every joint angle
+  // 100 counts (100·2π/16384 rad) above the joint's own zero.
+  RobotDescription robot;
+  robot.motor_pulley_radius_m = 0.0125;
+  robot.joint_pulley_radius_m = 0.01;
+  robot.spring_rate_N_per_m = 4000;
+  robot.joint_zero_count = 1000;
+  SyntheticSweep sweep = PlaySweep(1.0 * kDeg, -0.6 * kDeg, 1.25);
+  const double offset_rad = 100 * 2 * std::numbers::pi / 16384;
+  for (double& j : sweep.joint_rad) j += offset_rad;
+  protocol::CalibrationRecord held;
+  held.joint_zero_count = 900;
+
+  // Exercise.
+  const SweepCalibration out =
+      FitSweep(sweep.motor_rad, sweep.joint_rad, 1000, held, &robot, false);
+
+  // Verify: the slack of the joint's own angles, α and K = 2·k·r_j² = 0.8 N·m/rad
+  // from the description (quantised to the record's format), its zero count.
+  ASSERT_TRUE(out.record) << out.why;
+  EXPECT_NEAR(out.record->backlash.c_right.ToDouble(), 1.0 * kDeg, 0.002 * kDeg);
+  EXPECT_NEAR(out.record->backlash.c_left.ToDouble(), -0.6 * kDeg, 0.002 * kDeg);
+  EXPECT_NEAR(out.record->backlash.alpha.ToDouble(), 1.25, 1e-8);
+  EXPECT_NEAR(out.record->sea_stiffness.ToDouble(), 0.8, 1e-7);
+  EXPECT_EQ(out.record->joint_zero_count, 1000);
+}
+
+TEST(FitSweep, AJointThatNeverMovesGivesNoRecordAndSaysWhy) {
+  // Setup: the motor sweeps, the joint reads the same angle throughout.
+  SyntheticSweep sweep = PlaySweep(1.0 * kDeg, -1.0 * kDeg, 1.0);
+  std::fill(sweep.joint_rad.begin(), sweep.joint_rad.end(), 0.0);
+
+  // Exercise.
+  const SweepCalibration out =
+      FitSweep(sweep.motor_rad, sweep.joint_rad, 1000, {}, nullptr, false);
+
+  // Verify.
+  EXPECT_FALSE(out.record);
+  EXPECT_FALSE(out.why.empty());
 }
 
 }  // namespace

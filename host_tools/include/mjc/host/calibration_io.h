@@ -6,11 +6,14 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "mjc/host/board_client.h"
+#include "mjc/host/calibration_fit.h"
+#include "mjc/host/robot_description.h"
 #include "mjc/protocol/calibration_record.h"
 
 namespace mjc::host {
@@ -72,6 +75,29 @@ UploadOutcome UploadCalibration(const std::string& iface, int node,
 UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
                                 const protocol::CalibrationRecord& record, int timeout_ms,
                                 std::string* why);
+
+// A calibration sweep fitted and turned into the record to upload, as `mjc calibrate`
+// does it (and the paper's scenarios and the virtual board's rig, through this one
+// function):
+// - the fit: the play operator with the joint's first-order lag (FitBacklash with
+//   fit_lag, the angles recorded at `rate_hz`, legal > 0); α = 1 without a `robot`, or
+//   the description's (searched within ±kAlphaFitSpan of it with `fit_alpha`), and the
+//   joint angles shifted from the zero of the board's `held` record to the
+//   description's (JointZeroShift);
+// - the record: `held` with the fitted backlash (ToFirmwareConfig), the fit's RMS and
+//   lag, and with a `robot` its SEA stiffness and joint zero (UseRobotJoint).
+//   fitted_at_unix_s is left as in `held`, for the caller to stamp.
+// `record` is empty when the fit is not usable, and `why` says why (the fit's own
+// refusal or the firmware's range).
+struct SweepCalibration {
+  BacklashFit fit;
+  std::optional<protocol::CalibrationRecord> record;
+  std::string why;
+};
+SweepCalibration FitSweep(std::span<const double> motor_rad,
+                          std::vector<double> joint_rad, double rate_hz,
+                          const protocol::CalibrationRecord& held,
+                          const RobotDescription* robot, bool fit_alpha);
 
 struct BoardCalibration {
   // c_r, c_l, α, stiffness and joint zero count in force. The fit fields are not
