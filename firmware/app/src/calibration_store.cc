@@ -1,73 +1,44 @@
 #include "mjc/app/calibration_store.h"
 
 #include <array>
-#include <cstring>
 
 #include "mjc/app/joint_app.h"
-#include "mjc/core/wrapping.h"
-#include "mjc/protocol/little_endian.h"
 
 namespace mjc::app {
 
-std::optional<CalibrationStore::Loaded> CalibrationStore::ReadPage(
-    std::uint32_t page) const {
-  std::array<std::uint8_t, kRecordBytes> b{};
-  if (flash_->Read(page, 0, b) != hal::FlashResult::kOk) return std::nullopt;
-  if (protocol::GetLe(&b[0], 4) != kMagic || protocol::GetLe(&b[4], 2) != kVersion ||
-      protocol::GetLe(&b[6], 2) != protocol::kCalibrationRecordSize ||
-      protocol::GetLe(&b[68], 4) != kCommit ||
-      protocol::GetLe(&b[64], 4) !=
-          protocol::Crc32(std::span<const std::uint8_t>(b.data(), 64))) {
-    return std::nullopt;
-  }
+namespace {
+
+// An intact page counts only if its record is one the board accepts.
+bool AcceptPayload(std::span<const std::uint8_t> payload) {
+  protocol::CalibrationRecord record;
+  std::uint8_t detail = 0;
+  return protocol::DecodeCalibration(payload, &record, &detail) ==
+         protocol::CalibrationResult::kAccepted;
+}
+
+}  // namespace
+
+CalibrationStore::CalibrationStore(hal::Flash* flash, std::uint32_t page_a,
+                                   std::uint32_t page_b)
+    : pages_(flash, page_a, page_b, kFormat, AcceptPayload) {}
+
+std::optional<CalibrationStore::Loaded> CalibrationStore::Load() const {
+  std::array<std::uint8_t, kFormat.payload_bytes> payload{};
+  const auto found = pages_.Load(payload);
+  if (!found) return std::nullopt;
   Loaded loaded;
   std::uint8_t detail = 0;
-  if (protocol::DecodeCalibration(std::span<const std::uint8_t>(&b[16], 48),
-                                  &loaded.record,
-                                  &detail) != protocol::CalibrationResult::kAccepted) {
-    return std::nullopt;  // intact but not a calibration the board accepts
+  if (protocol::DecodeCalibration(payload, &loaded.record, &detail) !=
+      protocol::CalibrationResult::kAccepted) {
+    return std::nullopt;  // not reached: RecordPages took only accepted payloads
   }
-  loaded.sequence = static_cast<std::uint32_t>(protocol::GetLe(&b[8], 4));
-  loaded.page = page;
+  loaded.sequence = found->sequence;
+  loaded.page = found->page;
   return loaded;
 }
 
-std::optional<CalibrationStore::Loaded> CalibrationStore::Load() const {
-  const auto a = ReadPage(pages_[0]);
-  const auto b = ReadPage(pages_[1]);
-  if (a && b) return WrappingDelta(b->sequence, a->sequence) > 0 ? b : a;
-  return a ? a : b;
-}
-
 StoreResult CalibrationStore::Save(const protocol::CalibrationRecord& record) {
-  const auto newest = Load();
-  const std::uint32_t target =
-      newest && newest->page == pages_[0] ? pages_[1] : pages_[0];
-  const std::uint32_t sequence =
-      newest ? WrappingAdd<std::uint32_t>(newest->sequence, 1u) : 1u;
-
-  std::array<std::uint8_t, kRecordBytes> b{};
-  protocol::PutLe(&b[0], kMagic, 4);
-  protocol::PutLe(&b[4], kVersion, 2);
-  protocol::PutLe(&b[6], protocol::kCalibrationRecordSize, 2);
-  protocol::PutLe(&b[8], sequence, 4);
-  const auto payload = protocol::EncodeCalibration(record);
-  std::memcpy(&b[16], payload.data(), payload.size());
-  protocol::PutLe(&b[64], protocol::Crc32(std::span<const std::uint8_t>(b.data(), 64)),
-                  4);
-  protocol::PutLe(&b[68], kCommit, 4);
-
-  if (flash_->ErasePage(target) != hal::FlashResult::kOk) return StoreResult::kFlashError;
-  // Header and payload first, the CRC + commit double-word last.
-  for (std::uint32_t offset = 0; offset < kRecordBytes; offset += 8) {
-    if (flash_->ProgramDoubleWord(target, offset, protocol::GetLe(&b[offset], 8)) !=
-        hal::FlashResult::kOk) {
-      return StoreResult::kFlashError;
-    }
-  }
-  const auto written = ReadPage(target);
-  if (!written || written->sequence != sequence) return StoreResult::kVerifyFailed;
-  return StoreResult::kOk;
+  return pages_.Save(protocol::EncodeCalibration(record));
 }
 
 std::optional<CalibrationStore::Loaded> RestoreCalibration(

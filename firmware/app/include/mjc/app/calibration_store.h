@@ -1,47 +1,36 @@
-// Power-fail-safe calibration storage in two flash pages (A/B). Each page holds at most
-// one record (little-endian, 8-byte aligned):
-//
-//   offset size
-//        0    4 magic 'MJCS'
-//        4    2 schema version (1)
-//        6    2 payload length (48)
-//        8    4 sequence number (wraps; newer = positive wrapping difference)
-//       12    4 reserved, 0
-//       16   48 payload: the calibration record (protocol/calibration_record.h)
-//       64    4 CRC-32 of bytes 0..63
-//       68    4 commit mark 0xC0DEC0DE
-//
-// A save erases the page that does not hold the newest valid record, programs bytes
-// 0..63, and programs the CRC + commit double-word last: a record becomes valid in one
-// program operation, so a power cut at any point leaves the old record or the new one.
-// At boot the newest valid record wins; with none the board stays uncalibrated.
-// Writes happen only while the bridge is disabled (flash programming stalls the CPU's
-// flash reads on the G474) — the caller's duty, enforced by the app (idle only).
+// Power-fail-safe calibration storage in two flash pages (A/B): a RecordPages record
+// (mjc/boot/record_pages.h: the page layout and the save order that leaves the old
+// record or the new one at any power cut) with magic 'MJCS' (0x53434A4D), schema
+// version 1, commit mark 0xC0DEC0DE and the 48-byte calibration record
+// (protocol/calibration_record.h) as its payload; 72 bytes in all. At boot the newest
+// valid record wins; with none the board stays uncalibrated. Writes happen only while
+// the bridge is disabled (flash programming stalls the CPU's flash reads on the G474) —
+// the caller's duty, enforced by the app (idle only).
 #pragma once
 
 #include <cstdint>
 #include <optional>
 
 #include "hal/flash.h"
+#include "mjc/boot/record_pages.h"
 #include "mjc/protocol/calibration_record.h"
 
 namespace mjc::app {
 
-enum class StoreResult : std::uint8_t {
-  kOk = 0,
-  kFlashError = 1,    // erase or program failed (power, hardware)
-  kVerifyFailed = 2,  // read back differs from what was written
-};
+// What a save did: kOk, kFlashError (erase or program failed: power, hardware),
+// kVerifyFailed (read back differs from what was written). Stable codes.
+using StoreResult = boot::RecordResult;
 
 class CalibrationStore {
  public:
-  static constexpr std::uint32_t kMagic = 0x53434A4Du;  // "MJCS"
-  static constexpr std::uint16_t kVersion = 1;
-  static constexpr std::uint32_t kCommit = 0xC0DEC0DEu;
-  static constexpr std::size_t kRecordBytes = 72;
+  static constexpr boot::RecordFormat kFormat{
+      .magic = 0x53434A4Du,
+      .version = 1,
+      .payload_bytes = static_cast<std::uint16_t>(protocol::kCalibrationRecordSize),
+      .commit = 0xC0DEC0DEu};
+  static_assert(boot::RecordPages::RecordBytes(kFormat) == 72);
 
-  CalibrationStore(hal::Flash* flash, std::uint32_t page_a, std::uint32_t page_b)
-      : flash_(flash), pages_{page_a, page_b} {}
+  CalibrationStore(hal::Flash* flash, std::uint32_t page_a, std::uint32_t page_b);
 
   struct Loaded {
     protocol::CalibrationRecord record;
@@ -57,10 +46,7 @@ class CalibrationStore {
   StoreResult Save(const protocol::CalibrationRecord& record);
 
  private:
-  std::optional<Loaded> ReadPage(std::uint32_t page) const;
-
-  hal::Flash* flash_;
-  std::uint32_t pages_[2];
+  boot::RecordPages pages_;
 };
 
 class JointApp;

@@ -3,30 +3,17 @@
 // G474) so that no firmware update touches them. The bootloader reads it at every
 // reset to answer with the board's node id and to check an image's hardware range; the
 // application reads it for its node id (and writes it when commissioned: the hook in
-// BOOTLOADER.md). Power-cut-safe the way the calibration store is: each page holds at
-// most one record (little-endian):
-//
-//   offset size
-//        0    4 magic 'MJID' (0x44494A4D)
-//        4    2 record version (1)
-//        6    2 payload length (8)
-//        8    4 sequence number (wraps; newer = positive wrapping difference)
-//       12    4 reserved, 0
-//       16    1 node id (1..8)
-//       17    1 hardware revision (1..255)
-//       18    6 reserved, 0
-//       24    4 CRC-32 of bytes 0..23
-//       28    4 commit mark 0xC0DE1D1D
-//
-// A save erases the page that does not hold the newest valid record, programs bytes
-// 0..23 and then the CRC + commit double-word: the record becomes valid in one program
-// operation, so a power cut leaves the old record or the new one.
+// BOOTLOADER.md). Power-cut-safe as a RecordPages record (record_pages.h: the page
+// layout and the save order) with magic 'MJID' (0x44494A4D), version 1, commit mark
+// 0xC0DE1D1D and an 8-byte payload: node id (1..8), hardware revision (1..255), six
+// reserved bytes, 0. The whole record is 32 bytes.
 #pragma once
 
 #include <cstdint>
 #include <optional>
 
 #include "hal/flash.h"
+#include "mjc/boot/record_pages.h"
 
 namespace mjc::boot {
 
@@ -35,7 +22,7 @@ struct BoardIdentity {
   std::uint8_t hardware_revision = 0;  // 1..255
 };
 
-// Stable codes.
+// Stable codes; the first three are RecordResult's (checked in identity_store.cc).
 enum class IdentityResult : std::uint8_t {
   kOk = 0,
   kFlashError = 1,    // erase or program failed (power, hardware)
@@ -45,13 +32,11 @@ enum class IdentityResult : std::uint8_t {
 
 class IdentityStore {
  public:
-  static constexpr std::uint32_t kMagic = 0x44494A4Du;  // "MJID"
-  static constexpr std::uint16_t kVersion = 1;
-  static constexpr std::uint32_t kCommit = 0xC0DE1D1Du;
-  static constexpr std::uint32_t kRecordBytes = 32;
+  static constexpr RecordFormat kFormat{
+      .magic = 0x44494A4Du, .version = 1, .payload_bytes = 8, .commit = 0xC0DE1D1Du};
+  static_assert(RecordPages::RecordBytes(kFormat) == 32);
 
-  IdentityStore(hal::Flash* flash, std::uint32_t page_a, std::uint32_t page_b)
-      : flash_(flash), pages_{page_a, page_b} {}
+  IdentityStore(hal::Flash* flash, std::uint32_t page_a, std::uint32_t page_b);
 
   struct Loaded {
     BoardIdentity identity;
@@ -66,10 +51,7 @@ class IdentityStore {
   IdentityResult Save(const BoardIdentity& identity);
 
  private:
-  std::optional<Loaded> ReadPage(std::uint32_t page) const;
-
-  hal::Flash* flash_;
-  std::uint32_t pages_[2];
+  RecordPages pages_;
 };
 
 }  // namespace mjc::boot
