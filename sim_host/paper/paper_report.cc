@@ -54,6 +54,50 @@ double WindowEnergyErrorPct(const sim::WindowOutcome& w) {
   return 100.0 * std::max(e1, e2) / scale;
 }
 
+// Tables II–III's errors across amplitudes for one subject: RMSE (J) and NRMSE (%) of
+// the loading, unloading and net work, of the board against the plant's truth
+// (sim::SubjectSweep) or against the model's prediction (sim::ModelComparison).
+struct SweepErrors {
+  std::string subject;
+  double rmse_load, rmse_unload, rmse_net, nrmse_load, nrmse_unload, nrmse_net;
+};
+
+template <typename Compared>
+SweepErrors ErrorsOf(const Compared& c) {
+  return {c.subject,    c.rmse_load,    c.rmse_unload, c.rmse_net,
+          c.nrmse_load, c.nrmse_unload, c.nrmse_net};
+}
+
+// The "rmse_J" and "nrmse_pct" members of a subject's entry in results.json.
+void AddErrorsJson(const SweepErrors& e, nlohmann::json* subject) {
+  (*subject)["rmse_J"] = {
+      {"load", e.rmse_load}, {"unload", e.rmse_unload}, {"net", e.rmse_net}};
+  (*subject)["nrmse_pct"] = {
+      {"load", e.nrmse_load}, {"unload", e.nrmse_unload}, {"net", e.nrmse_net}};
+}
+
+// The table's header and one row per subject, in Markdown; the same rows to `csv`.
+std::string ErrorTable(const std::vector<SweepErrors>& rows, const fs::path& csv) {
+  std::string text =
+      "| subject | RMSE loading (mJ) | RMSE unloading (mJ) | RMSE net (mJ) | NRMSE "
+      "loading | NRMSE unloading | NRMSE net |\n|---|---|---|---|---|---|---|\n";
+  CsvTable table({"subject", "rmse_load_mJ", "rmse_unload_mJ", "rmse_net_mJ",
+                  "nrmse_load_pct", "nrmse_unload_pct", "nrmse_net_pct"});
+  for (const SweepErrors& e : rows) {
+    text += "| " + e.subject + " | " + Format("%.4f", e.rmse_load * kMilli) + " | " +
+            Format("%.4f", e.rmse_unload * kMilli) + " | " +
+            Format("%.4f", e.rmse_net * kMilli) + " | " + Format("%.2f%%", e.nrmse_load) +
+            " | " + Format("%.2f%%", e.nrmse_unload) + " | " +
+            Format("%.2f%%", e.nrmse_net) + " |\n";
+    table.AddRow({e.subject, CsvTable::Number(e.rmse_load * kMilli),
+                  CsvTable::Number(e.rmse_unload * kMilli),
+                  CsvTable::Number(e.rmse_net * kMilli), CsvTable::Number(e.nrmse_load),
+                  CsvTable::Number(e.nrmse_unload), CsvTable::Number(e.nrmse_net)});
+  }
+  table.Write(csv);
+  return text;
+}
+
 }  // namespace
 
 Report::Report(fs::path out, bool quiet, double frequency_hz)
@@ -277,35 +321,16 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
                         {"truth_eta_pct", StatsJson(p.truth_eta)},
                         {"power_rmse_pct_peak", p.power_rmse_pct_peak}});
     }
-    subjects.push_back(
-        {{"subject", s.subject},
-         {"points", points},
-         {"rmse_J",
-          {{"load", s.rmse_load}, {"unload", s.rmse_unload}, {"net", s.rmse_net}}},
-         {"nrmse_pct",
-          {{"load", s.nrmse_load}, {"unload", s.nrmse_unload}, {"net", s.nrmse_net}}}});
+    nlohmann::json subject = {{"subject", s.subject}, {"points", points}};
+    AddErrorsJson(ErrorsOf(s), &subject);
+    subjects.push_back(std::move(subject));
   }
   csv.Write(out_ / "amplitude_sweep.csv");
 
-  Print(
-      "\n## Tables II–III: board estimate vs plant truth across amplitudes\n\n"
-      "| subject | RMSE loading (mJ) | RMSE unloading (mJ) | RMSE net (mJ) | NRMSE "
-      "loading | "
-      "NRMSE unloading | NRMSE net |\n|---|---|---|---|---|---|---|\n");
-  CsvTable rmse({"subject", "rmse_load_mJ", "rmse_unload_mJ", "rmse_net_mJ",
-                 "nrmse_load_pct", "nrmse_unload_pct", "nrmse_net_pct"});
-  for (const auto& s : sweeps) {
-    Print("| " + s.subject + " | " + Format("%.4f", s.rmse_load * kMilli) + " | " +
-          Format("%.4f", s.rmse_unload * kMilli) + " | " +
-          Format("%.4f", s.rmse_net * kMilli) + " | " + Format("%.2f%%", s.nrmse_load) +
-          " | " + Format("%.2f%%", s.nrmse_unload) + " | " +
-          Format("%.2f%%", s.nrmse_net) + " |\n");
-    rmse.AddRow({s.subject, CsvTable::Number(s.rmse_load * kMilli),
-                 CsvTable::Number(s.rmse_unload * kMilli),
-                 CsvTable::Number(s.rmse_net * kMilli), CsvTable::Number(s.nrmse_load),
-                 CsvTable::Number(s.nrmse_unload), CsvTable::Number(s.nrmse_net)});
-  }
-  rmse.Write(out_ / "rmse.csv");
+  std::vector<SweepErrors> errors;
+  for (const auto& s : sweeps) errors.push_back(ErrorsOf(s));
+  Print("\n## Tables II–III: board estimate vs plant truth across amplitudes\n\n" +
+        ErrorTable(errors, out_ / "rmse.csv"));
   json_["amplitude_sweep"] = subjects;
 
   // The attachment identified on the board, per subject and amplitude, beside the
@@ -460,43 +485,26 @@ void Report::Model(const std::vector<sim::ModelComparison>& comparisons) {
                         {"model_unload_J", p.model_unload},
                         {"model_net_J", p.model_net}});
     }
-    subjects.push_back(
-        {{"subject", c.subject},
-         {"model",
-          {{"stiffness_Nm_rad", c.model.stiffness_Nm_per_rad},
-           {"damping_Nms_rad", c.model.damping_Nm_s_per_rad},
-           {"preload_Nm", c.model.preload_Nm}}},
-         {"identified",
-          {{"stiffness_Nm_rad", StatsJson(c.identified.stiffness)},
-           {"damping_Nms_rad", StatsJson(c.identified.damping)},
-           {"offset_Nm", StatsJson(c.identified.offset)}}},
-         {"points", points},
-         {"rmse_J",
-          {{"load", c.rmse_load}, {"unload", c.rmse_unload}, {"net", c.rmse_net}}},
-         {"nrmse_pct",
-          {{"load", c.nrmse_load}, {"unload", c.nrmse_unload}, {"net", c.nrmse_net}}}});
+    subjects.push_back({{"subject", c.subject},
+                        {"model",
+                         {{"stiffness_Nm_rad", c.model.stiffness_Nm_per_rad},
+                          {"damping_Nms_rad", c.model.damping_Nm_s_per_rad},
+                          {"preload_Nm", c.model.preload_Nm}}},
+                        {"identified",
+                         {{"stiffness_Nm_rad", StatsJson(c.identified.stiffness)},
+                          {"damping_Nms_rad", StatsJson(c.identified.damping)},
+                          {"offset_Nm", StatsJson(c.identified.offset)}}},
+                        {"points", points}});
+    AddErrorsJson(ErrorsOf(c), &subjects.back());
   }
   csv.Write(out_ / "model_vs_board.csv");
 
+  std::vector<SweepErrors> errors;
+  for (const auto& c : comparisons) errors.push_back(ErrorsOf(c));
   Print(
       "\n## Tables II–III: experiment (board) vs simulation (model) across amplitudes; "
-      "NRMSE normalised to the prediction's range\n\n"
-      "| subject | RMSE loading (mJ) | RMSE unloading (mJ) | RMSE net (mJ) | NRMSE "
-      "loading | NRMSE unloading | NRMSE net |\n|---|---|---|---|---|---|---|\n");
-  CsvTable rmse({"subject", "rmse_load_mJ", "rmse_unload_mJ", "rmse_net_mJ",
-                 "nrmse_load_pct", "nrmse_unload_pct", "nrmse_net_pct"});
-  for (const auto& c : comparisons) {
-    Print("| " + c.subject + " | " + Format("%.4f", c.rmse_load * kMilli) + " | " +
-          Format("%.4f", c.rmse_unload * kMilli) + " | " +
-          Format("%.4f", c.rmse_net * kMilli) + " | " + Format("%.2f%%", c.nrmse_load) +
-          " | " + Format("%.2f%%", c.nrmse_unload) + " | " +
-          Format("%.2f%%", c.nrmse_net) + " |\n");
-    rmse.AddRow({c.subject, CsvTable::Number(c.rmse_load * kMilli),
-                 CsvTable::Number(c.rmse_unload * kMilli),
-                 CsvTable::Number(c.rmse_net * kMilli), CsvTable::Number(c.nrmse_load),
-                 CsvTable::Number(c.nrmse_unload), CsvTable::Number(c.nrmse_net)});
-  }
-  rmse.Write(out_ / "model_rmse.csv");
+      "NRMSE normalised to the prediction's range\n\n" +
+      ErrorTable(errors, out_ / "model_rmse.csv"));
   json_["model_vs_board"] = subjects;
   WorkFigures(true);
 }

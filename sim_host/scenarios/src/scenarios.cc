@@ -59,6 +59,15 @@ void Upload(BusBoard& bus, const Calibration& record) {
   }
 }
 
+// RMSE of `measured` against `reference` (into *rmse) and normalised to the
+// reference's range, % (the paper's NRMSE; 0 for a reference without range).
+double Nrmse(const std::vector<double>& measured, const std::vector<double>& reference,
+             double* rmse) {
+  *rmse = host::Rmse(measured, reference);
+  const double range = host::Range(reference);
+  return range > 0 ? 100.0 * *rmse / range : 0.0;
+}
+
 double EtaPercent(double load, double unload) {
   return load > 0 ? (1.0 - std::fabs(unload) / load) * 100.0 : 0.0;
 }
@@ -424,15 +433,9 @@ SubjectSweep SummariseSweep(const std::string& subject,
     tnet.push_back(pt.truth_net.mean);
   }
   out.points = std::move(points);
-  auto nrmse = [](const std::vector<double>& a, const std::vector<double>& b,
-                  double* rmse) {
-    *rmse = host::Rmse(a, b);
-    const double range = host::Range(b);
-    return range > 0 ? 100.0 * *rmse / range : 0.0;
-  };
-  out.nrmse_load = nrmse(load, tload, &out.rmse_load);
-  out.nrmse_unload = nrmse(unload, tunload, &out.rmse_unload);
-  out.nrmse_net = nrmse(net, tnet, &out.rmse_net);
+  out.nrmse_load = Nrmse(load, tload, &out.rmse_load);
+  out.nrmse_unload = Nrmse(unload, tunload, &out.rmse_unload);
+  out.nrmse_net = Nrmse(net, tnet, &out.rmse_net);
   return out;
 }
 
@@ -517,15 +520,9 @@ ModelComparison CompareWithModel(const SubjectSweep& measured,
     munload.push_back(p.truth_unload.mean);
     mnet.push_back(p.truth_net.mean);
   }
-  const auto nrmse = [](const std::vector<double>& a, const std::vector<double>& b,
-                        double* rmse) {
-    *rmse = host::Rmse(a, b);
-    const double range = host::Range(b);
-    return range > 0 ? 100.0 * *rmse / range : 0.0;
-  };
-  out.nrmse_load = nrmse(load, mload, &out.rmse_load);
-  out.nrmse_unload = nrmse(unload, munload, &out.rmse_unload);
-  out.nrmse_net = nrmse(net, mnet, &out.rmse_net);
+  out.nrmse_load = Nrmse(load, mload, &out.rmse_load);
+  out.nrmse_unload = Nrmse(unload, munload, &out.rmse_unload);
+  out.nrmse_net = Nrmse(net, mnet, &out.rmse_net);
   return out;
 }
 
