@@ -14,6 +14,7 @@
 #include <numbers>
 #include <vector>
 
+#include "delay_line.h"
 #include "mjc/core/backlash.h"
 #include "mjc/core/encoder.h"
 #include "mjc/core/interface_energy.h"

@@ -187,7 +187,8 @@ std::uint32_t StackUsed(const std::uint32_t* top_of_main) {
                                     reinterpret_cast<std::uintptr_t>(p));
 }
 
-void SetUpTick(ControlTick& tick) {
+// The benchmarks' tick: ±1° of slack, the position loop's gains, armed.
+void ConfigureTick(ControlTick& tick) {
   ControlConfig config;
   config.backlash.c_right = Angle::FromDouble(0.0175);
   config.backlash.c_left = Angle::FromDouble(-0.0175);
@@ -197,6 +198,10 @@ void SetUpTick(ControlTick& tick) {
   config.position.kff = Fixed<SecondPerRadian, 16>::FromDouble(0.1);
   tick.Configure(config);
   tick.Arm(true);
+}
+
+void SetUpTick(ControlTick& tick) {
+  ConfigureTick(tick);
   SineConfig sine;
   sine.amplitude = Angle::FromDouble(0.4363);
   sine.frequency = Frequency::FromDouble(20.0);
@@ -215,15 +220,7 @@ void SetUpCan() {
 
 // Configured, armed, idle until the velocity window is full, the trial's sine started.
 void PrepareTrialTick(ControlTick& tick) {
-  ControlConfig config;
-  config.backlash.c_right = Angle::FromDouble(0.0175);
-  config.backlash.c_left = Angle::FromDouble(-0.0175);
-  config.position.kp = Fixed<PerRadian, 16>::FromDouble(8.0);
-  config.position.ki = Fixed<PerRadianSecond, 16>::FromDouble(20.0);
-  config.position.kd = Fixed<SecondPerRadian, 16>::FromDouble(0.05);
-  config.position.kff = Fixed<SecondPerRadian, 16>::FromDouble(0.1);
-  tick.Configure(config);
-  tick.Arm(true);
+  ConfigureTick(tick);
   TickResult r;
   for (int i = 0; i < 600; ++i) tick.ISR_Step(SensorWords(Angle{}), &r);
   if (tick.trajectory().StartSine(TrialSine()) != TrajectoryError::kOk) {

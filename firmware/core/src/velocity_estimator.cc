@@ -2,11 +2,6 @@
 
 namespace mjc {
 
-void DelayLine::Fill(std::int32_t value) {
-  for (auto& slot : storage_) slot = value;
-  next_ = 0;
-}
-
 namespace {
 
 struct SlopeScale {

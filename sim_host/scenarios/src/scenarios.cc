@@ -59,6 +59,16 @@ void Upload(BusBoard& bus, const Calibration& record) {
   }
 }
 
+// A trial's or sweep's frequency, repetitions and rests as the wire carries them (the
+// inverse of the CAN node's Oscillation): mHz, 100 ms.
+template <class Core, class Wire>
+void SetWireTiming(const Core& core, Wire* wire) {
+  wire->frequency_mHz =
+      static_cast<std::uint16_t>(std::lround(core.frequency.ToDouble() * 1000));
+  wire->repetitions = static_cast<std::uint8_t>(core.repetitions);
+  wire->rest_100ms = static_cast<std::uint8_t>(core.rest_ms / 100);
+}
+
 // RMSE of `measured` against `reference` (into *rmse) and normalised to the
 // reference's range, % (the paper's NRMSE; 0 for a reference without range).
 double Nrmse(const std::vector<double>& measured, const std::vector<double>& reference,
@@ -117,10 +127,7 @@ CalibrationOutcome RunCalibration(BusBoard& bus, const RampedSineConfig& sweep,
   }
   protocol::SweepConfig config;
   config.end_amplitude = sweep.end_amplitude;
-  config.frequency_mHz =
-      static_cast<std::uint16_t>(std::lround(sweep.frequency.ToDouble() * 1000));
-  config.repetitions = static_cast<std::uint8_t>(sweep.repetitions);
-  config.rest_100ms = static_cast<std::uint8_t>(sweep.rest_ms / 100);
+  SetWireTiming(sweep, &config);
   if (!client.Send(config, &why)) {
     out.message = why;
     return out;
@@ -282,10 +289,7 @@ TrialOutcome RunTrial(BusBoard& bus, const SineConfig& sine, bool keep_trace,
   // host::RunBoardTrial, its windows as they arrived over the bus.
   protocol::TrialConfig config;
   config.amplitude = sine.amplitude;
-  config.frequency_mHz =
-      static_cast<std::uint16_t>(std::lround(sine.frequency.ToDouble() * 1000));
-  config.repetitions = static_cast<std::uint8_t>(sine.repetitions);
-  config.rest_100ms = static_cast<std::uint8_t>(sine.rest_ms / 100);
+  SetWireTiming(sine, &config);
   const host::BoardTrial trial = host::RunBoardTrial(bus.client(), config, nullptr);
   bus.SetBeforeTick(nullptr);
   bus.SetAfterTick(nullptr);

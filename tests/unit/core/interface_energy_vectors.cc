@@ -11,6 +11,7 @@
 #include <limits>
 #include <numbers>
 
+#include "delay_line.h"
 #include "mjc/core/encoder.h"
 #include "mjc/core/interface_energy.h"
 #include "mjc/core/velocity_estimator.h"

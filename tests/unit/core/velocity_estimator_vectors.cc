@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <numbers>
 
+#include "delay_line.h"
 #include "mjc/core/velocity_estimator.h"
 #include "vector_test.h"
 

@@ -30,30 +30,6 @@
 
 namespace mjc {
 
-// A fixed delay of int32 samples in caller-owned storage: delay() = storage.size().
-class DelayLine {
- public:
-  explicit DelayLine(std::span<std::int32_t> storage) : storage_(storage) {}
-
-  // Sets every slot, so the next delay() pushes return `value`.
-  void Fill(std::int32_t value);
-
-  // Stores `value` and returns the one pushed delay() ticks ago.
-  std::int32_t Push(std::int32_t value) {
-    if (storage_.empty()) return value;
-    const std::int32_t oldest = storage_[next_];
-    storage_[next_] = value;
-    next_ = next_ + 1 == storage_.size() ? 0 : next_ + 1;
-    return oldest;
-  }
-
-  std::size_t delay() const { return storage_.size(); }
-
- private:
-  std::span<std::int32_t> storage_;
-  std::size_t next_ = 0;
-};
-
 struct VelocityEstimatorConfig {
   // Window length N in ticks: odd, kMinWindow..storage size. 501 at 10 kHz is a 50 ms
   // window and a 25 ms delay (SIGNAL_CHAIN.md: with a 14-bit encoder a 50 ms window keeps
