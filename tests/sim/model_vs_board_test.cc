@@ -77,8 +77,8 @@ TEST(SimModel, PredictionFromTheIdentifiedAttachmentAgreesWithTheBoard) {
         c.subject.c_str(), c.model.stiffness_Nm_per_rad, c.model.damping_Nm_s_per_rad,
         c.model.preload_Nm, c.nrmse_load, c.nrmse_unload, c.nrmse_net, 1e3 * c.rmse_net);
   }
-  // Subject 1's measurement against subject 3's model (k 4.0 vs 4.5 N·m/rad, b 0.235
-  // vs 0.25 N·m·s/rad: 15 % more net work at 25°) is outside the bound.
+  // Subject 1's measurement (k 4.5 N·m/rad, b 0.25 N·m·s/rad) against subject 3's
+  // model (k 4.0, b 0.235) is outside the bound.
   const ModelComparison crossed =
       CompareWithModel(run.measured[0], run.predicted[1], run.comparisons[1].identified,
                        run.comparisons[1].model);
