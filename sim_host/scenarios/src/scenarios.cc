@@ -78,6 +78,27 @@ double Nrmse(const std::vector<double>& measured, const std::vector<double>& ref
   return range > 0 ? 100.0 * *rmse / range : 0.0;
 }
 
+// Tables II–III's errors across amplitudes, into *out's rmse_* (J) and nrmse_* (%): the
+// board's mean loading, unloading and net work at each amplitude of `measured` against
+// the truth at the same amplitude of `reference` (the board's own sweep, for its errors
+// against the plant, or the model's predicted sweep).
+template <class Errors>
+void SetEnergyErrors(const std::vector<AmplitudePoint>& measured,
+                     const std::vector<AmplitudePoint>& reference, Errors* out) {
+  std::vector<double> load, unload, net, ref_load, ref_unload, ref_net;
+  for (std::size_t i = 0; i < measured.size(); ++i) {
+    load.push_back(measured[i].load.mean);
+    unload.push_back(measured[i].unload.mean);
+    net.push_back(measured[i].net.mean);
+    ref_load.push_back(reference[i].truth_load.mean);
+    ref_unload.push_back(reference[i].truth_unload.mean);
+    ref_net.push_back(reference[i].truth_net.mean);
+  }
+  out->nrmse_load = Nrmse(load, ref_load, &out->rmse_load);
+  out->nrmse_unload = Nrmse(unload, ref_unload, &out->rmse_unload);
+  out->nrmse_net = Nrmse(net, ref_net, &out->rmse_net);
+}
+
 double EtaPercent(double load, double unload) {
   return load > 0 ? (1.0 - std::fabs(unload) / load) * 100.0 : 0.0;
 }
@@ -427,19 +448,8 @@ SubjectSweep SummariseSweep(const std::string& subject,
                             std::vector<AmplitudePoint> points) {
   SubjectSweep out;
   out.subject = subject;
-  std::vector<double> load, unload, net, tload, tunload, tnet;
-  for (const AmplitudePoint& pt : points) {
-    load.push_back(pt.load.mean);
-    unload.push_back(pt.unload.mean);
-    net.push_back(pt.net.mean);
-    tload.push_back(pt.truth_load.mean);
-    tunload.push_back(pt.truth_unload.mean);
-    tnet.push_back(pt.truth_net.mean);
-  }
   out.points = std::move(points);
-  out.nrmse_load = Nrmse(load, tload, &out.rmse_load);
-  out.nrmse_unload = Nrmse(unload, tunload, &out.rmse_unload);
-  out.nrmse_net = Nrmse(net, tnet, &out.rmse_net);
+  SetEnergyErrors(out.points, out.points, &out);
   return out;
 }
 
@@ -508,7 +518,6 @@ ModelComparison CompareWithModel(const SubjectSweep& measured,
   out.subject = measured.subject;
   out.identified = identified;
   out.model = model;
-  std::vector<double> load, unload, net, mload, munload, mnet;
   for (std::size_t i = 0; i < measured.points.size(); ++i) {
     const AmplitudePoint& m = measured.points[i];
     const AmplitudePoint& p = predicted.points[i];
@@ -517,16 +526,8 @@ ModelComparison CompareWithModel(const SubjectSweep& measured,
     }
     out.points.push_back({m.amplitude_deg, m.load, m.unload, m.net, p.truth_load.mean,
                           p.truth_unload.mean, p.truth_net.mean});
-    load.push_back(m.load.mean);
-    unload.push_back(m.unload.mean);
-    net.push_back(m.net.mean);
-    mload.push_back(p.truth_load.mean);
-    munload.push_back(p.truth_unload.mean);
-    mnet.push_back(p.truth_net.mean);
   }
-  out.nrmse_load = Nrmse(load, mload, &out.rmse_load);
-  out.nrmse_unload = Nrmse(unload, munload, &out.rmse_unload);
-  out.nrmse_net = Nrmse(net, mnet, &out.rmse_net);
+  SetEnergyErrors(measured.points, predicted.points, &out);
   return out;
 }
 
