@@ -282,6 +282,28 @@ UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
   return out;
 }
 
+SweepSamples RecordSweep(BoardClient& board, double length_s,
+                         const std::function<void()>& each, std::string* why) {
+  SweepSamples out;
+  const std::uint64_t malformed_before = board.malformed();
+  board.TakeAngles();  // samples kept earlier, if any, are not this sweep's
+  board.KeepAngles(true);
+  const auto take_samples = [&] {
+    for (const AngleSample& a : board.TakeAngles()) {
+      out.motor_rad.push_back(a.motor_rad);
+      out.joint_rad.push_back(a.joint_rad);
+    }
+    if (each) each();
+  };
+  const Patience patience{
+      std::chrono::milliseconds(static_cast<long>(2000 * length_s) + 2000)};
+  out.ended = board.AwaitMotionEnd(protocol::BoardState::kCalibrating, take_samples,
+                                   patience, &out.end, why);
+  board.KeepAngles(false);
+  out.malformed = board.malformed() - malformed_before;
+  return out;
+}
+
 SweepCalibration FitSweep(std::span<const double> motor_rad,
                           std::vector<double> joint_rad, double rate_hz,
                           const protocol::CalibrationRecord& held,

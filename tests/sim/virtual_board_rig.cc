@@ -1,7 +1,6 @@
 #include "virtual_board_rig.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "mjc/host/calibration_io.h"
@@ -76,31 +75,12 @@ CalibrationRun SweepAndFit(host::BoardClient& client, const protocol::SweepConfi
     return run;
   }
 
-  // The board's angles until it is idle again, at most twice the sweep's length of its
-  // own time (mjc calibrate's patience).
-  const std::uint64_t malformed_before = client.malformed();
-  client.TakeAngles();
-  client.KeepAngles(true);
-  std::vector<double> motor, joint;
-  bool sweeping_seen = false;
-  const auto finished = [&] {
-    for (const host::AngleSample& a : client.TakeAngles()) {
-      motor.push_back(a.motor_rad);
-      joint.push_back(a.joint_rad);
-    }
-    const BoardState state = client.status().state;
-    sweeping_seen = sweeping_seen || state == BoardState::kCalibrating;
-    return state == BoardState::kFault || (sweeping_seen && state == BoardState::kIdle);
-  };
+  // The board's angles until it is idle again, with mjc calibrate's patience.
   const double sweep_s =
       sweep.repetitions / (sweep.frequency_mHz / 1000.0) + 2 * sweep.rest_100ms / 10.0;
-  const host::Patience patience{
-      std::chrono::milliseconds(static_cast<long>(2000 * sweep_s) + 2000)};
-  host::WaitEnd end{};
-  const bool ended = client.Await(finished, patience, &end, &why);
-  client.KeepAngles(false);
-  run.samples = motor.size();
-  if (!ended) {
+  host::SweepSamples samples = host::RecordSweep(client, sweep_s, {}, &why);
+  run.samples = samples.motor_rad.size();
+  if (!samples.ended) {
     run.error = "the sweep did not end: " + why;
     return run;
   }
@@ -110,14 +90,15 @@ CalibrationRun SweepAndFit(host::BoardClient& client, const protocol::SweepConfi
     return run;
   }
   // A lost sample shifts every later one: the lag fit would read it as lag.
-  if (client.malformed() != malformed_before) {
+  if (samples.malformed != 0) {
     run.error = "malformed angle frames during the sweep";
     return run;
   }
 
   // Fitted and made into the record as `mjc calibrate` does (no robot description).
   host::SweepCalibration fitted =
-      host::FitSweep(motor, std::move(joint), *rate_hz, held->record, nullptr, false);
+      host::FitSweep(samples.motor_rad, std::move(samples.joint_rad), *rate_hz,
+                     held->record, nullptr, false);
   run.fit = fitted.fit;
   if (!fitted.record) {
     run.error = "fit not usable: " + fitted.why;

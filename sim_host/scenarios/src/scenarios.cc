@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <exception>
 #include <mutex>
@@ -161,28 +160,13 @@ CalibrationOutcome RunCalibration(BusBoard& bus, const RampedSineConfig& sweep,
         (started ? ": " + std::string(host::OutcomeName(*started)) : ": " + why);
     return out;
   }
-  const std::uint64_t malformed_before = client.malformed();
-  std::vector<double> motor, joint;
-  client.TakeAngles();
-  client.KeepAngles(true);
-  const auto take_samples = [&] {
-    for (const host::AngleSample& a : client.TakeAngles()) {
-      motor.push_back(a.motor_rad);
-      joint.push_back(a.joint_rad);
-    }
-  };
   const double sweep_s =
       config.repetitions / (config.frequency_mHz / 1000.0) + 2 * config.rest_100ms / 10.0;
-  const host::Patience patience{
-      std::chrono::milliseconds(static_cast<long>(2000 * sweep_s) + 2000)};
-  host::WaitEnd end{};
-  const bool ended = client.AwaitMotionEnd(protocol::BoardState::kCalibrating,
-                                           take_samples, patience, &end, &why);
-  client.KeepAngles(false);
+  host::SweepSamples samples = host::RecordSweep(client, sweep_s, {}, &why);
   // Fig. 7: θ_m, θ_j as the host received them.
-  out.motor_rad = motor;
-  out.joint_rad = joint;
-  if (!ended) {
+  out.motor_rad = samples.motor_rad;
+  out.joint_rad = samples.joint_rad;
+  if (!samples.ended) {
     out.message = "the sweep did not end: " + why;
     return out;
   }
@@ -191,15 +175,15 @@ CalibrationOutcome RunCalibration(BusBoard& bus, const RampedSineConfig& sweep,
         "the sweep faulted: fault " + host::DescribeFault(client.status().fault);
     return out;
   }
-  if (client.malformed() != malformed_before) {
+  if (samples.malformed != 0) {
     out.message = "malformed angle frames during the sweep: not fitting it";
     return out;
   }
   // Fitted and made into the record as `mjc calibrate` does (host::FitSweep). No
   // fitted_at: a simulated run has no date, and its outputs are the same every run.
   host::SweepCalibration fitted =
-      host::FitSweep(motor, std::move(joint), *rate_hz, held->record, joint_of.robot,
-                     joint_of.fit_alpha);
+      host::FitSweep(samples.motor_rad, std::move(samples.joint_rad), *rate_hz,
+                     held->record, joint_of.robot, joint_of.fit_alpha);
   out.fit = fitted.fit;
   out.error_right_deg =
       (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / std::numbers::pi;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -75,6 +76,22 @@ UploadOutcome UploadCalibration(const std::string& iface, int node,
 UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
                                 const protocol::CalibrationRecord& record, int timeout_ms,
                                 std::string* why);
+
+// The board's angle telemetry over the calibration sweep it has just started, recorded
+// as `mjc calibrate` and the paper's scenarios record it: every angle sample `board`
+// receives until the board leaves kCalibrating. Followed at the board's pace (Patience):
+// at most twice the sweep's `length_s` in the board's time, plus 2 s, and the board may
+// not fall silent. `each`, when given, runs on every pass of the wait after the new
+// samples are taken (a caller's progress line). The samples are kept however the wait
+// ended.
+struct SweepSamples {
+  std::vector<double> motor_rad, joint_rad;
+  bool ended = false;  // the board left kCalibrating; if not, `end` and *why say how
+  WaitEnd end{};
+  std::uint64_t malformed = 0;  // frames `board` found malformed while recording
+};
+SweepSamples RecordSweep(BoardClient& board, double length_s,
+                         const std::function<void()>& each, std::string* why);
 
 // A calibration sweep fitted and turned into the record to upload, as `mjc calibrate`
 // does it (and the paper's scenarios and the virtual board's rig, through this one
