@@ -82,26 +82,24 @@ std::int64_t CycleTicks(Frequency f, double tick_rate_hz) {
   return 4 * std::llround(tick_rate_hz / (4.0 * f.ToDouble()));
 }
 
-Trial TrialOf(const SineConfig& c) {
+// The shape of either configuration, its amplitude going from `start_amplitude` to
+// `end_amplitude` over the cycles.
+template <class Config>
+Trial TrialOf(const Config& c, Angle start_amplitude, Angle end_amplitude) {
   const double tick = c.tick_rate_hz;
   return {c.neutral.ToDouble(),
-          c.amplitude.ToDouble(),
-          c.amplitude.ToDouble(),
+          start_amplitude.ToDouble(),
+          end_amplitude.ToDouble(),
           std::llround(c.rest_ms * tick / 1000.0),
           CycleTicks(c.frequency, tick),
           c.repetitions,
           tick};
 }
 
+Trial TrialOf(const SineConfig& c) { return TrialOf(c, c.amplitude, c.amplitude); }
+
 Trial TrialOf(const RampedSineConfig& c) {
-  const double tick = c.tick_rate_hz;
-  return {c.neutral.ToDouble(),
-          c.start_amplitude.ToDouble(),
-          c.end_amplitude.ToDouble(),
-          std::llround(c.rest_ms * tick / 1000.0),
-          CycleTicks(c.frequency, tick),
-          c.repetitions,
-          tick};
+  return TrialOf(c, c.start_amplitude, c.end_amplitude);
 }
 
 struct Label {
