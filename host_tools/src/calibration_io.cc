@@ -333,6 +333,53 @@ SweepCalibration FitSweep(std::span<const double> motor_rad,
   return out;
 }
 
+SweepRun RunSweep(BoardClient& board, const protocol::SweepConfig& sweep,
+                  const RobotDescription* robot, bool fit_alpha) {
+  SweepRun out;
+  std::string why;
+  const auto held = ReadCalibration(board, &why);
+  if (!held) {
+    out.error = "cannot read the calibration in force: " + why;
+    return out;
+  }
+  const auto rate_hz = board.ReadParam(protocol::ParamId::kTelemetryAnglesHz, 500, &why);
+  if (!rate_hz || *rate_hz <= 0) {
+    out.error = "no angle telemetry to fit: " + why;
+    return out;
+  }
+  if (!board.Send(sweep, &why)) {
+    out.error = why;
+    return out;
+  }
+  const auto started =
+      board.Command(protocol::CommandCode::kStartSweep, kStartAnswerMs, &why);
+  if (started != protocol::CommandOutcomeCode::kAccepted) {
+    out.error = "the board refused the calibration sweep" +
+                (started ? ": " + std::string(OutcomeName(*started)) : ": " + why);
+    return out;
+  }
+  const double length_s =
+      sweep.repetitions / (sweep.frequency_mHz / 1000.0) + 2 * sweep.rest_100ms / 10.0;
+  out.samples = RecordSweep(board, length_s, {}, &why);
+  if (!out.samples.ended) {
+    out.error = "the sweep did not end: " + why;
+    return out;
+  }
+  if (board.status().state == protocol::BoardState::kFault) {
+    out.error = "the sweep faulted: fault " + DescribeFault(board.status().fault);
+    return out;
+  }
+  // A lost sample shifts every later one in time: the lag fit would read it as lag.
+  if (out.samples.malformed != 0) {
+    out.error = "malformed angle frames during the sweep: not fitting it";
+    return out;
+  }
+  out.fitted = FitSweep(out.samples.motor_rad, out.samples.joint_rad, *rate_hz,
+                        held->record, robot, fit_alpha);
+  if (!out.fitted->record) out.error = "calibration refused: " + out.fitted->why;
+  return out;
+}
+
 std::optional<BoardCalibration> ReadCalibration(BoardClient& board, std::string* why) {
   using protocol::ParamId;
   std::int32_t value[6] = {};

@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "mjc/host/calibration_io.h"
-#include "mjc/host/describe.h"
 #include "mjc/host/report.h"
 #include "mjc/host/units.h"
 
@@ -51,60 +50,15 @@ double CalibrationRun::worst_error_deg() const {
 CalibrationRun SweepAndFit(host::BoardClient& client, const protocol::SweepConfig& sweep,
                            const plant::PlantParams& plant) {
   CalibrationRun run;
-  std::string why;
-  // What the board holds: the new record keeps its stiffness and joint zero.
-  const auto held = host::ReadCalibration(client, &why);
-  if (!held) {
-    run.error = "cannot read the calibration in force: " + why;
-    return run;
-  }
-  const auto rate_hz = client.ReadParam(ParamId::kTelemetryAnglesHz, 500, &why);
-  if (!rate_hz || *rate_hz <= 0) {
-    run.error = "no angle telemetry rate: " + why;
-    return run;
-  }
-  if (!client.Send(sweep, &why)) {
-    run.error = why;
-    return run;
-  }
-  const auto outcome =
-      client.Command(CommandCode::kStartSweep, host::kStartAnswerMs, &why);
-  if (outcome != CommandOutcomeCode::kAccepted) {
-    run.error = "the sweep was not started: " +
-                (outcome ? std::string(host::OutcomeName(*outcome)) : why);
-    return run;
-  }
-
-  // The board's angles until it is idle again, with mjc calibrate's patience.
-  const double sweep_s =
-      sweep.repetitions / (sweep.frequency_mHz / 1000.0) + 2 * sweep.rest_100ms / 10.0;
-  host::SweepSamples samples = host::RecordSweep(client, sweep_s, {}, &why);
-  run.samples = samples.motor_rad.size();
-  if (!samples.ended) {
-    run.error = "the sweep did not end: " + why;
-    return run;
-  }
-  if (client.status().state == BoardState::kFault) {
-    run.error = "the board faulted during the sweep: fault " +
-                host::DescribeFault(client.status().fault);
-    return run;
-  }
-  // A lost sample shifts every later one: the lag fit would read it as lag.
-  if (samples.malformed != 0) {
-    run.error = "malformed angle frames during the sweep";
-    return run;
-  }
-
   // Fitted and made into the record as `mjc calibrate` does (no robot description).
-  host::SweepCalibration fitted =
-      host::FitSweep(samples.motor_rad, std::move(samples.joint_rad), *rate_hz,
-                     held->record, nullptr, false);
-  run.fit = fitted.fit;
-  if (!fitted.record) {
-    run.error = "fit not usable: " + fitted.why;
+  host::SweepRun swept = host::RunSweep(client, sweep, nullptr, false);
+  run.samples = swept.samples.motor_rad.size();
+  if (swept.fitted) run.fit = swept.fitted->fit;
+  if (!swept.error.empty()) {
+    run.error = swept.error;
     return run;
   }
-  run.record = *fitted.record;
+  run.record = *swept.fitted->record;
   run.error_right_deg = host::RadToDeg(run.fit.c_right_rad - plant.cable.c_right_rad);
   run.error_left_deg = host::RadToDeg(run.fit.c_left_rad - plant.cable.c_left_rad);
   return run;

@@ -126,74 +126,36 @@ RampedSineConfig PaperCalibrationSweep() {
 CalibrationOutcome RunCalibration(BusBoard& bus, const RampedSineConfig& sweep,
                                   const CalibrationJoint& joint_of) {
   // As `mjc calibrate` (host_tools/mjc/calibrate.cc) over the bus, with the host
-  // library's functions: the record in force read, the sweep configured and started,
-  // the board's angle telemetry kept until it is idle again, the fit, the upload over
-  // ISO-TP, the record read back.
+  // library's functions: the sweep run and fitted (host::RunSweep: the record in force
+  // read, the sweep configured and started, the board's angle telemetry kept until it
+  // is idle again, the fit), the upload over ISO-TP, the record read back.
   CalibrationOutcome out;
   const plant::CableParams& cable = bus.plant().params().cable;
   out.true_c_right_rad = cable.c_right_rad;
   out.true_c_left_rad = cable.c_left_rad;
-  host::BoardClient& client = bus.client();
-  std::string why;
-  const auto held = host::ReadCalibration(client, &why);
-  if (!held) {
-    out.message = "cannot read the calibration in force: " + why;
-    return out;
-  }
-  const auto rate_hz = client.ReadParam(protocol::ParamId::kTelemetryAnglesHz, 500, &why);
-  if (!rate_hz || *rate_hz <= 0) {
-    out.message = "no angle telemetry to fit: " + why;
-    return out;
-  }
   protocol::SweepConfig config;
   config.end_amplitude = sweep.end_amplitude;
   SetWireTiming(sweep, &config);
-  if (!client.Send(config, &why)) {
-    out.message = why;
-    return out;
-  }
-  const auto started =
-      client.Command(protocol::CommandCode::kStartSweep, host::kStartAnswerMs, &why);
-  if (started != protocol::CommandOutcomeCode::kAccepted) {
-    out.message =
-        "the board refused the calibration sweep" +
-        (started ? ": " + std::string(host::OutcomeName(*started)) : ": " + why);
-    return out;
-  }
-  const double sweep_s =
-      config.repetitions / (config.frequency_mHz / 1000.0) + 2 * config.rest_100ms / 10.0;
-  host::SweepSamples samples = host::RecordSweep(client, sweep_s, {}, &why);
+  host::BoardClient& client = bus.client();
+  // No fitted_at in the record: a simulated run has no date, and its outputs are the
+  // same every run.
+  host::SweepRun run = host::RunSweep(client, config, joint_of.robot, joint_of.fit_alpha);
   // Fig. 7: θ_m, θ_j as the host received them.
-  out.motor_rad = samples.motor_rad;
-  out.joint_rad = samples.joint_rad;
-  if (!samples.ended) {
-    out.message = "the sweep did not end: " + why;
+  out.motor_rad = std::move(run.samples.motor_rad);
+  out.joint_rad = std::move(run.samples.joint_rad);
+  if (run.fitted) {
+    out.fit = run.fitted->fit;
+    out.error_right_deg =
+        (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / std::numbers::pi;
+    out.error_left_deg =
+        (out.fit.c_left_rad - out.true_c_left_rad) * 180.0 / std::numbers::pi;
+  }
+  if (!run.error.empty()) {
+    out.message = run.error;
     return out;
   }
-  if (client.status().state == protocol::BoardState::kFault) {
-    out.message =
-        "the sweep faulted: fault " + host::DescribeFault(client.status().fault);
-    return out;
-  }
-  if (samples.malformed != 0) {
-    out.message = "malformed angle frames during the sweep: not fitting it";
-    return out;
-  }
-  // Fitted and made into the record as `mjc calibrate` does (host::FitSweep). No
-  // fitted_at: a simulated run has no date, and its outputs are the same every run.
-  host::SweepCalibration fitted =
-      host::FitSweep(samples.motor_rad, std::move(samples.joint_rad), *rate_hz,
-                     held->record, joint_of.robot, joint_of.fit_alpha);
-  out.fit = fitted.fit;
-  out.error_right_deg =
-      (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / std::numbers::pi;
-  out.error_left_deg =
-      (out.fit.c_left_rad - out.true_c_left_rad) * 180.0 / std::numbers::pi;
-  if (!fitted.record) {
-    out.message = "calibration refused: " + fitted.why;
-    return out;
-  }
-  const protocol::CalibrationRecord& record = *fitted.record;
+  std::string why;
+  const protocol::CalibrationRecord& record = *run.fitted->record;
   out.record = {record.backlash, record.sea_stiffness, record.joint_zero_count};
   const auto isotp = bus.Connect();
   const host::UploadOutcome sent =

@@ -116,6 +116,20 @@ SweepCalibration FitSweep(std::span<const double> motor_rad,
                           const protocol::CalibrationRecord& held,
                           const RobotDescription* robot, bool fit_alpha);
 
+// A calibration sweep run on `board` (idle, on the robot alone) and fitted, with mjc
+// calibrate's steps but none of its files, progress or emergency stop: the record in
+// force read (the new one keeps what it holds), the angle telemetry's rate read,
+// `sweep` configured and started, its samples recorded (RecordSweep, the patience from
+// the sweep's own length) and fitted (FitSweep with `robot` and `fit_alpha`). How the
+// paper's scenarios and the virtual board's tests calibrate a board over the bus.
+struct SweepRun {
+  SweepSamples samples;                    // as recorded, however the sweep ended
+  std::optional<SweepCalibration> fitted;  // once the samples were fitted
+  std::string error;  // empty: fitted->record is the record to upload; else why not
+};
+SweepRun RunSweep(BoardClient& board, const protocol::SweepConfig& sweep,
+                  const RobotDescription* robot, bool fit_alpha);
+
 struct BoardCalibration {
   // c_r, c_l, α, stiffness and joint zero count in force. The fit fields are not
   // readable over the bus and stay 0.
