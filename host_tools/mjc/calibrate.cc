@@ -116,17 +116,9 @@ void AddCalibrate(CLI::App& app) {
       }
       std::printf("robot %s\n", host::DescribeRobot(*robot, robot_path).c_str());
     }
-    host::OutputFolder folder;
-    try {
-      folder = host::PrepareOutputFolder(output.out, "out/calibration", output.force,
-                                         kOutputs);
-    } catch (const std::exception& e) {
-      throw Failure(e.what());
-    }
-    const std::filesystem::path dir = folder.path;
+    const std::filesystem::path dir =
+        PrepareOutputs("mjc calibrate", output, "out/calibration", kOutputs);
     const std::string out_path = (dir / "calibration.json").string();
-    std::fprintf(stderr, "mjc calibrate: writing to %s/%s\n", dir.c_str(),
-                 folder.chosen ? " (a new folder)" : "");
     host::RunRecord run;
     run.command = "calibrate";
     run.node = node;
