@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -117,17 +116,9 @@ void AddCalibrate(CLI::App& app) {
       }
       std::printf("robot %s\n", host::DescribeRobot(*robot, robot_path).c_str());
     }
-    host::OutputFolder folder;
-    try {
-      folder = host::PrepareOutputFolder(output.out, "out/calibration", output.force,
-                                         kOutputs);
-    } catch (const std::exception& e) {
-      throw Failure(e.what());
-    }
-    const std::filesystem::path dir = folder.path;
+    const std::filesystem::path dir =
+        PrepareOutputs("mjc calibrate", output, "out/calibration", kOutputs);
     const std::string out_path = (dir / "calibration.json").string();
-    std::fprintf(stderr, "mjc calibrate: writing to %s/%s\n", dir.c_str(),
-                 folder.chosen ? " (a new folder)" : "");
     host::RunRecord run;
     run.command = "calibrate";
     run.node = node;
@@ -197,23 +188,14 @@ void AddCalibrate(CLI::App& app) {
       std::fprintf(stderr, "mjc calibrate: sweeping %.0f° over %d cycles at %.2f Hz...\n",
                    amplitude_deg, cycles, frequency_hz);
       const std::uint64_t dropped_before = link->stats().rx_dropped;
-      const std::uint64_t malformed_before = board.malformed();
-      board.TakeAngles();
-      board.KeepAngles(true);
-      // Followed at the board's pace (host::Patience): at most twice the sweep's own
-      // length in the board's time, and the board may not fall silent.
+      // The sweep's length: its patience (host::RecordSweep) and the progress line's.
       const double expected_s = cycles / frequency_hz + 2 * sweep.rest_100ms / 10.0;
-      std::vector<double> motor, joint;
       // Progress from the board's own clock: its time into the sweep against the sweep's
       // length, and so the cycle it is in.
       std::optional<std::uint32_t> sweep_start;
       std::uint32_t shown_tick = 0;
       const double rest_s = sweep.rest_100ms / 10.0;
-      const auto take_samples = [&] {
-        for (const host::AngleSample& a : board.TakeAngles()) {
-          motor.push_back(a.motor_rad);
-          joint.push_back(a.joint_rad);
-        }
+      const auto show_progress = [&] {
         if (board.status().state == BoardState::kCalibrating) {
           const std::uint32_t tick = board.status().tick;
           if (!sweep_start) sweep_start = tick;
@@ -230,21 +212,19 @@ void AddCalibrate(CLI::App& app) {
           }
         }
       };
-      const host::Patience patience{
-          std::chrono::milliseconds(static_cast<long>(2000 * expected_s) + 2000)};
-      host::WaitEnd end{};
-      const bool ended = board.AwaitMotionEnd(BoardState::kCalibrating, take_samples,
-                                              patience, &end, &why);
-      board.KeepAngles(false);
+      const host::SweepSamples samples =
+          host::RecordSweep(board, expected_s, show_progress, &why);
       EndProgress();
+      const std::vector<double>& motor = samples.motor_rad;
+      const std::vector<double>& joint = samples.joint_rad;
       // The stop first (the motor must not wait for a file), then the samples, kept
       // however the sweep ended. Two boards answering for the node may both be moving:
       // both are told.
-      const std::string stopped =
-          !ended && !stopped_by_estop() &&
-                  (end == host::WaitEnd::kInterrupted || end == host::WaitEnd::kAmbiguous)
-              ? StopMotion(board)
-              : "";
+      const std::string stopped = !samples.ended && !stopped_by_estop() &&
+                                          (samples.end == host::WaitEnd::kInterrupted ||
+                                           samples.end == host::WaitEnd::kAmbiguous)
+                                      ? StopMotion(board)
+                                      : "";
       const std::filesystem::path sweep_path = dir / "sweep.csv";
       WriteSweep(sweep_path, *rate_hz, motor, joint);
       const std::string kept = "; " + std::to_string(motor.size()) +
@@ -255,8 +235,8 @@ void AddCalibrate(CLI::App& app) {
                       ConfirmEmergencyStop(board, *estop) + kept + " (not fitted)");
       }
       estop.reset();  // the motion is over
-      if (!ended) {
-        switch (end) {
+      if (!samples.ended) {
+        switch (samples.end) {
           case host::WaitEnd::kLinkFailed:
             throw Failure(why + kept);
           case host::WaitEnd::kInterrupted:
@@ -281,7 +261,7 @@ void AddCalibrate(CLI::App& app) {
       }
       // A lost sample shifts every later one in time: the lag fit would read it as lag.
       const std::uint64_t dropped = link->stats().rx_dropped - dropped_before;
-      const std::uint64_t malformed = board.malformed() - malformed_before;
+      const std::uint64_t malformed = samples.malformed;
       if (dropped + malformed > 0) {
         throw Failure("the record has gaps (" + std::to_string(dropped) +
                       " frames dropped by the kernel, " + std::to_string(malformed) +

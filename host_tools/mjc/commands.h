@@ -12,16 +12,19 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "mjc/gpio/line_spec.h"
 #include "mjc/host/board_client.h"
 #include "mjc/host/can_link.h"
 #include "mjc/host/config.h"
 #include "mjc/host/emergency_stop.h"
+#include "mjc/host/run_record.h"
 #include "mjc/protocol/can_frame.h"
 
 namespace mjc::cli {
@@ -162,6 +165,25 @@ inline void AddOutputOptions(CLI::App* cmd, OutputOptions* options,
                       "--force)");
   cmd->add_flag("--force", options->force,
                 "Write into an existing --out folder, replacing an earlier run's files");
+}
+
+// The folder a run of `tool` ("mjc trial") writes into: host::PrepareOutputFolder with
+// --out and --force, a new one under `base` (the base AddOutputOptions named) without
+// --out. Said on stderr before anything is written; a folder that cannot be used is a
+// Failure.
+inline std::filesystem::path PrepareOutputs(const char* tool,
+                                            const OutputOptions& options,
+                                            const std::string& base,
+                                            const std::vector<std::string>& outputs) {
+  host::OutputFolder folder;
+  try {
+    folder = host::PrepareOutputFolder(options.out, base, options.force, outputs);
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+  std::fprintf(stderr, "%s: writing to %s/%s\n", tool, folder.path.c_str(),
+               folder.chosen ? " (a new folder)" : "");
+  return folder.path;
 }
 
 // The raw CAN link on `iface`; throws Failure naming the interface when it cannot open.

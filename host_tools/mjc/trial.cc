@@ -98,17 +98,9 @@ void AddTrial(CLI::App& app) {
       ->check(LineSpecCheck(true))
       ->capture_default_str();
   cmd->callback([] {
-    host::OutputFolder folder;
-    try {
-      folder =
-          host::PrepareOutputFolder(output.out, "out/trial", output.force, kTrialOutputs);
-    } catch (const std::exception& e) {
-      throw Failure(e.what());
-    }
-    const std::filesystem::path dir = folder.path;
+    const std::filesystem::path dir =
+        PrepareOutputs("mjc trial", output, "out/trial", kTrialOutputs);
     const std::string saved = (dir / "windows.csv").string();
-    std::fprintf(stderr, "mjc trial: writing to %s/%s\n", dir.c_str(),
-                 folder.chosen ? " (a new folder)" : "");
     // Written first: an unwritable folder is found before the trials run.
     std::vector<host::TrialWindows> runs;
     host::WriteWindowsCsv(runs, dir);

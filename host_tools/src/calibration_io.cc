@@ -282,6 +282,28 @@ UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
   return out;
 }
 
+SweepSamples RecordSweep(BoardClient& board, double length_s,
+                         const std::function<void()>& each, std::string* why) {
+  SweepSamples out;
+  const std::uint64_t malformed_before = board.malformed();
+  board.TakeAngles();  // samples kept earlier, if any, are not this sweep's
+  board.KeepAngles(true);
+  const auto take_samples = [&] {
+    for (const AngleSample& a : board.TakeAngles()) {
+      out.motor_rad.push_back(a.motor_rad);
+      out.joint_rad.push_back(a.joint_rad);
+    }
+    if (each) each();
+  };
+  const Patience patience{
+      std::chrono::milliseconds(static_cast<long>(2000 * length_s) + 2000)};
+  out.ended = board.AwaitMotionEnd(protocol::BoardState::kCalibrating, take_samples,
+                                   patience, &out.end, why);
+  board.KeepAngles(false);
+  out.malformed = board.malformed() - malformed_before;
+  return out;
+}
+
 SweepCalibration FitSweep(std::span<const double> motor_rad,
                           std::vector<double> joint_rad, double rate_hz,
                           const protocol::CalibrationRecord& held,
@@ -308,6 +330,53 @@ SweepCalibration FitSweep(std::span<const double> motor_rad,
       static_cast<std::uint32_t>(std::lround(out.fit.rms_error_rad * 1e6));
   record.fit_lag_us = static_cast<std::uint32_t>(std::lround(out.fit.lag_s * 1e6));
   out.record = record;
+  return out;
+}
+
+SweepRun RunSweep(BoardClient& board, const protocol::SweepConfig& sweep,
+                  const RobotDescription* robot, bool fit_alpha) {
+  SweepRun out;
+  std::string why;
+  const auto held = ReadCalibration(board, &why);
+  if (!held) {
+    out.error = "cannot read the calibration in force: " + why;
+    return out;
+  }
+  const auto rate_hz = board.ReadParam(protocol::ParamId::kTelemetryAnglesHz, 500, &why);
+  if (!rate_hz || *rate_hz <= 0) {
+    out.error = "no angle telemetry to fit: " + why;
+    return out;
+  }
+  if (!board.Send(sweep, &why)) {
+    out.error = why;
+    return out;
+  }
+  const auto started =
+      board.Command(protocol::CommandCode::kStartSweep, kStartAnswerMs, &why);
+  if (started != protocol::CommandOutcomeCode::kAccepted) {
+    out.error = "the board refused the calibration sweep" +
+                (started ? ": " + std::string(OutcomeName(*started)) : ": " + why);
+    return out;
+  }
+  const double length_s =
+      sweep.repetitions / (sweep.frequency_mHz / 1000.0) + 2 * sweep.rest_100ms / 10.0;
+  out.samples = RecordSweep(board, length_s, {}, &why);
+  if (!out.samples.ended) {
+    out.error = "the sweep did not end: " + why;
+    return out;
+  }
+  if (board.status().state == protocol::BoardState::kFault) {
+    out.error = "the sweep faulted: fault " + DescribeFault(board.status().fault);
+    return out;
+  }
+  // A lost sample shifts every later one in time: the lag fit would read it as lag.
+  if (out.samples.malformed != 0) {
+    out.error = "malformed angle frames during the sweep: not fitting it";
+    return out;
+  }
+  out.fitted = FitSweep(out.samples.motor_rad, out.samples.joint_rad, *rate_hz,
+                        held->record, robot, fit_alpha);
+  if (!out.fitted->record) out.error = "calibration refused: " + out.fitted->why;
   return out;
 }
 

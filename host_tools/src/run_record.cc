@@ -35,61 +35,48 @@ std::string Hex(std::uint32_t v, int digits) {
   return out;
 }
 
-// Reading, each failure a std::runtime_error naming the key.
-struct Reader {
-  const nlohmann::json& Get(const nlohmann::json& o, const char* key) const {
-    if (!o.contains(key)) throw std::runtime_error("'" + prefix + key + "' is missing");
-    return o[key];
+using Reader = strict::FieldReader<nlohmann::json>;
+
+// A number written as `digits` lower-case hex digits ("board.build").
+std::uint32_t HexNumber(const Reader& in, const nlohmann::json& object,
+                        std::string_view prefix, std::string_view key,
+                        std::size_t digits) {
+  const std::string text = in.String(object, prefix, key);
+  const bool ok =
+      text.size() == digits && std::all_of(text.begin(), text.end(), [](char c) {
+        return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+      });
+  if (!ok) {
+    in.Fail(strict::FieldName(prefix, key),
+            "must be " + std::to_string(digits) + " lower-case hex digits");
   }
-  void Known(const nlohmann::json& o, std::span<const std::string_view> keys) const {
-    if (!o.is_object()) throw std::runtime_error("'" + prefix + "' must be an object");
-    if (const auto unknown = strict::UnknownKey(o, keys, prefix)) {
-      throw std::runtime_error(*unknown);
-    }
+  return static_cast<std::uint32_t>(std::stoul(text, nullptr, 16));
+}
+
+// An integer within [lo, hi]; a value that is no integer is told the range too.
+std::int64_t IntegerIn(const Reader& in, const nlohmann::json& object,
+                       std::string_view prefix, std::string_view key, std::int64_t lo,
+                       std::int64_t hi) {
+  if (!in.Value(object, prefix, key).is_number_integer()) {
+    in.Fail(
+        strict::FieldName(prefix, key),
+        "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   }
-  std::string String(const nlohmann::json& o, const char* key) const {
-    const auto& v = Get(o, key);
-    if (!v.is_string())
-      throw std::runtime_error("'" + prefix + key + "' must be a string");
-    return v.get<std::string>();
-  }
-  double Number(const nlohmann::json& o, const char* key) const {
-    const auto& v = Get(o, key);
-    if (!v.is_number())
-      throw std::runtime_error("'" + prefix + key + "' must be a number");
-    return v.get<double>();
-  }
-  std::int64_t Integer(const nlohmann::json& o, const char* key, std::int64_t lo,
-                       std::int64_t hi) const {
-    const auto& v = Get(o, key);
-    if (!v.is_number_integer() || v.get<std::int64_t>() < lo ||
-        v.get<std::int64_t>() > hi) {
-      throw std::runtime_error("'" + prefix + key + "' must be an integer in " +
-                               std::to_string(lo) + ".." + std::to_string(hi));
-    }
-    return v.get<std::int64_t>();
-  }
-  bool Bool(const nlohmann::json& o, const char* key) const {
-    const auto& v = Get(o, key);
-    if (!v.is_boolean())
-      throw std::runtime_error("'" + prefix + key + "' must be true or false");
-    return v.get<bool>();
-  }
-  std::uint32_t HexNumber(const nlohmann::json& o, const char* key,
-                          std::size_t digits) const {
-    const std::string text = String(o, key);
-    const bool ok =
-        text.size() == digits && std::all_of(text.begin(), text.end(), [](char c) {
-          return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
-        });
-    if (!ok) {
-      throw std::runtime_error("'" + prefix + key + "' must be " +
-                               std::to_string(digits) + " lower-case hex digits");
-    }
-    return static_cast<std::uint32_t>(std::stoul(text, nullptr, 16));
-  }
-  std::string prefix;
-};
+  return in.Integer(object, prefix, key, lo, hi);
+}
+
+// The object `key` of `object`, every key of it in `known`; null when the run had none
+// (an older image sends no BoardInfo; a run that did not fault has no fault).
+const nlohmann::json* OptionalSection(const Reader& in, const nlohmann::json& object,
+                                      std::string_view prefix, std::string_view key,
+                                      std::span<const std::string_view> known) {
+  const nlohmann::json& v = in.Value(object, prefix, key);
+  if (v.is_null()) return nullptr;
+  const std::string name = strict::FieldName(prefix, key);
+  if (!v.is_object()) in.Fail(name, "must be null or an object");
+  in.CheckKnown(v, name + ".", known);
+  return &v;
+}
 
 }  // namespace
 
@@ -140,30 +127,32 @@ nlohmann::json RunRecordToJson(const RunRecord& r) {
 
 std::optional<RunRecord> RunRecordFromJson(const nlohmann::json& j, std::string* why) {
   RunRecord r;
-  Reader in;
+  // Each failure a std::runtime_error "run.json: field '<name>' <what>" (or an unknown
+  // key, named with the known one it resembles).
+  const Reader in("run.json");
   try {
-    in.Known(j, kKeys);
-    if (in.String(j, "format") != kFormat) {
-      throw std::runtime_error("'format' is not \"" + std::string(kFormat) +
-                               "\" (written by another version of mjc?)");
+    if (!j.is_object()) {
+      throw std::runtime_error("run.json: the top level must be an object");
     }
-    r.command = in.String(j, "command");
-    r.node = static_cast<int>(in.Integer(j, "node", 1, 8));
-    r.iface = in.String(j, "iface");
-    if (const auto& b = in.Get(j, "board"); !b.is_null()) {
-      Reader sub{"board."};
-      sub.Known(b, kBoardKeys);
+    in.CheckKnown(j, "", kKeys);
+    if (in.String(j, "", "format") != kFormat) {
+      in.Fail("format", "is not \"" + std::string(kFormat) +
+                            "\" (written by another version of mjc?)");
+    }
+    r.command = in.String(j, "", "command");
+    r.node = static_cast<int>(IntegerIn(in, j, "", "node", 1, 8));
+    r.iface = in.String(j, "", "iface");
+    if (const auto* b = OptionalSection(in, j, "", "board", kBoardKeys)) {
       protocol::BoardInfo info;
-      info.build = sub.HexNumber(b, "build", 8);
-      info.dirty = sub.Bool(b, "dirty");
-      const std::string image = sub.String(b, "image");
+      info.build = HexNumber(in, *b, "board", "build", 8);
+      info.dirty = in.Bool(*b, "board", "dirty");
+      const std::string image = in.String(*b, "board", "image");
       if (image != "application" && image != "bootloader") {
-        throw std::runtime_error(
-            "'board.image' must be \"application\" or \"bootloader\"");
+        in.Fail("board.image", "must be \"application\" or \"bootloader\"");
       }
       info.image = image == "bootloader" ? protocol::ImageKind::kBootloader
                                          : protocol::ImageKind::kApplication;
-      const std::string cause = sub.String(b, "reset_cause");
+      const std::string cause = in.String(*b, "board", "reset_cause");
       bool known = false;
       for (int c = 0; c <= 5; ++c) {
         if (ResetCauseName(static_cast<protocol::ResetCause>(c)) == cause) {
@@ -171,64 +160,57 @@ std::optional<RunRecord> RunRecordFromJson(const nlohmann::json& j, std::string*
           known = true;
         }
       }
-      if (!known)
-        throw std::runtime_error("'board.reset_cause' \"" + cause + "\" is unknown");
-      info.instance = static_cast<std::uint16_t>(sub.HexNumber(b, "instance", 4));
+      if (!known) in.Fail("board.reset_cause", "\"" + cause + "\" is unknown");
+      info.instance =
+          static_cast<std::uint16_t>(HexNumber(in, *b, "board", "instance", 4));
       r.board = info;
     }
-    if (const auto& c = in.Get(j, "calibration"); !c.is_null()) {
-      Reader sub{"calibration."};
-      sub.Known(c, kHeldKeys);
+    if (const auto* c = OptionalSection(in, j, "", "calibration", kHeldKeys)) {
       BoardCalibration held;
-      held.calibrated = sub.Bool(c, "calibrated");
+      held.calibrated = in.Bool(*c, "calibration", "calibrated");
       held.record.backlash.c_right =
-          Angle::Quantize(DegToRad(sub.Number(c, "c_right_deg")));
+          Angle::Quantize(DegToRad(in.Double(*c, "calibration", "c_right_deg")));
       held.record.backlash.c_left =
-          Angle::Quantize(DegToRad(sub.Number(c, "c_left_deg")));
-      held.record.backlash.alpha = Scale::Quantize(sub.Number(c, "alpha"));
+          Angle::Quantize(DegToRad(in.Double(*c, "calibration", "c_left_deg")));
+      held.record.backlash.alpha = Scale::Quantize(in.Double(*c, "calibration", "alpha"));
       held.record.sea_stiffness =
-          Stiffness::Quantize(sub.Number(c, "sea_stiffness_Nm_per_rad"));
-      held.record.joint_zero_count =
-          static_cast<std::uint16_t>(sub.Integer(c, "joint_zero_count", 0, 16383));
+          Stiffness::Quantize(in.Double(*c, "calibration", "sea_stiffness_Nm_per_rad"));
+      held.record.joint_zero_count = static_cast<std::uint16_t>(
+          IntegerIn(in, *c, "calibration", "joint_zero_count", 0, 16383));
       r.calibration = held;
     }
-    r.robot = in.Get(j, "robot");
+    r.robot = in.Value(j, "", "robot");
     if (!r.robot.is_null() && !r.robot.is_object()) {
-      throw std::runtime_error("'robot' must be null or an object");
+      in.Fail("robot", "must be null or an object");
     }
-    if (const auto& s = in.Get(j, "subject"); !s.is_null())
-      r.subject = in.String(j, "subject");
-    r.protocol = in.String(j, "protocol");
-    const auto& amplitudes = in.Get(j, "amplitudes_deg");
-    if (!amplitudes.is_array())
-      throw std::runtime_error("'amplitudes_deg' must be an array");
+    if (!in.Value(j, "", "subject").is_null()) r.subject = in.String(j, "", "subject");
+    r.protocol = in.String(j, "", "protocol");
+    const auto& amplitudes = in.Value(j, "", "amplitudes_deg");
+    if (!amplitudes.is_array()) in.Fail("amplitudes_deg", "must be an array");
     for (const auto& a : amplitudes) {
-      if (!a.is_number()) throw std::runtime_error("'amplitudes_deg' must hold numbers");
+      if (!a.is_number()) in.Fail("amplitudes_deg", "must hold numbers");
       r.amplitudes_deg.push_back(a.get<double>());
     }
-    r.frequency_hz = in.Number(j, "frequency_hz");
-    r.repetitions = static_cast<int>(in.Integer(j, "repetitions", 0, 255));
-    r.rest_s = in.Number(j, "rest_s");
-    r.started_utc = in.String(j, "started_utc");
-    r.host = in.String(j, "host");
-    r.mjc = in.String(j, "mjc");
-    const auto& end = in.Get(j, "end");
-    Reader sub{"end."};
-    sub.Known(end, kEndKeys);
-    r.end.outcome = sub.String(end, "outcome");
+    r.frequency_hz = in.Double(j, "", "frequency_hz");
+    r.repetitions = static_cast<int>(IntegerIn(in, j, "", "repetitions", 0, 255));
+    r.rest_s = in.Double(j, "", "rest_s");
+    r.started_utc = in.String(j, "", "started_utc");
+    r.host = in.String(j, "", "host");
+    r.mjc = in.String(j, "", "mjc");
+    const auto& end = in.Section(j, "end", kEndKeys);
+    r.end.outcome = in.String(end, "end", "outcome");
     if (std::find(std::begin(kRunOutcomes), std::end(kRunOutcomes), r.end.outcome) ==
         std::end(kRunOutcomes)) {
-      throw std::runtime_error("'end.outcome' \"" + r.end.outcome + "\" is unknown");
+      in.Fail("end.outcome", "\"" + r.end.outcome + "\" is unknown");
     }
-    if (const auto& f = sub.Get(end, "fault"); !f.is_null()) {
-      Reader fault{"end.fault."};
-      fault.Known(f, kFaultKeys);
-      r.end.fault_code = static_cast<int>(fault.Integer(f, "code", 0, 65535));
-      (void)fault.String(f, "name");
+    if (const auto* f = OptionalSection(in, end, "end", "fault", kFaultKeys)) {
+      r.end.fault_code =
+          static_cast<int>(IntegerIn(in, *f, "end.fault", "code", 0, 65535));
+      (void)in.String(*f, "end.fault", "name");
     }
-    r.end.message = sub.String(end, "message");
+    r.end.message = in.String(end, "end", "message");
   } catch (const std::exception& e) {
-    *why = std::string("run.json: ") + e.what();
+    *why = e.what();
     return std::nullopt;
   }
   return r;

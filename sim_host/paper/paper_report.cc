@@ -98,6 +98,53 @@ std::string ErrorTable(const std::vector<SweepErrors>& rows, const fs::path& csv
   return text;
 }
 
+// Figs. 10–12's work per flexion at one amplitude as both of their tables show it (the
+// amplitude sweep's and the model comparison's): the board's loading, unloading and
+// net work (mean ± SE) each beside a reference's, the plant's truth or the model's
+// prediction (J).
+struct WorkPoint {
+  double amplitude_deg;
+  const host::Stats& load;
+  const host::Stats& unload;
+  const host::Stats& net;
+  double reference_load, reference_unload, reference_net;
+};
+
+// Its Markdown cells, "| amplitude | … | reference net", for the caller to close.
+std::string WorkCells(const WorkPoint& p) {
+  return "| " + Format("%.0f°", p.amplitude_deg) + " | " +
+         PlusMinus(p.load, kMilli, "%.3f", true) + " | " +
+         Format("%.3f", p.reference_load * kMilli) + " | " +
+         PlusMinus(p.unload, kMilli, "%.3f", true) + " | " +
+         Format("%.3f", p.reference_unload * kMilli) + " | " +
+         PlusMinus(p.net, kMilli, "%.3f", true) + " | " +
+         Format("%.3f", p.reference_net * kMilli);
+}
+
+// Its CSV cells: subject, amplitude, then each work's mean, SE and reference (mJ).
+std::vector<std::string> WorkCsvCells(const std::string& subject, const WorkPoint& p) {
+  return {subject,
+          CsvTable::Number(p.amplitude_deg),
+          CsvTable::Number(p.load.mean * kMilli),
+          CsvTable::Number(p.load.se * kMilli),
+          CsvTable::Number(p.reference_load * kMilli),
+          CsvTable::Number(p.unload.mean * kMilli),
+          CsvTable::Number(p.unload.se * kMilli),
+          CsvTable::Number(p.reference_unload * kMilli),
+          CsvTable::Number(p.net.mean * kMilli),
+          CsvTable::Number(p.net.se * kMilli),
+          CsvTable::Number(p.reference_net * kMilli)};
+}
+
+// Its entry's members in results.json that both tables have: the amplitude and the
+// board's statistics (the reference's are named by each table).
+nlohmann::json WorkJson(const WorkPoint& p) {
+  return {{"amplitude_deg", p.amplitude_deg},
+          {"load_J", StatsJson(p.load)},
+          {"unload_J", StatsJson(p.unload)},
+          {"net_J", StatsJson(p.net)}};
+}
+
 }  // namespace
 
 Report::Report(fs::path out, bool quiet, double frequency_hz)
@@ -291,35 +338,28 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
           "|---|---|---|---|---|---|---|---|---|\n");
     nlohmann::json points = nlohmann::json::array();
     for (const auto& p : s.points) {
-      Print("| " + Format("%.0f°", p.amplitude_deg) + " | " +
-            PlusMinus(p.load, kMilli, "%.3f", true) + " | " +
-            Format("%.3f", p.truth_load.mean * kMilli) + " | " +
-            PlusMinus(p.unload, kMilli, "%.3f", true) + " | " +
-            Format("%.3f", p.truth_unload.mean * kMilli) + " | " +
-            PlusMinus(p.net, kMilli, "%.3f", true) + " | " +
-            Format("%.3f", p.truth_net.mean * kMilli) + " | " +
-            Format("%.1f%%", p.eta.mean) + " | " + Format("%.1f%%", p.truth_eta.mean) +
-            " |\n");
-      csv.AddRow(
-          {s.subject, CsvTable::Number(p.amplitude_deg),
-           CsvTable::Number(p.load.mean * kMilli), CsvTable::Number(p.load.se * kMilli),
-           CsvTable::Number(p.truth_load.mean * kMilli),
-           CsvTable::Number(p.unload.mean * kMilli),
-           CsvTable::Number(p.unload.se * kMilli),
-           CsvTable::Number(p.truth_unload.mean * kMilli),
-           CsvTable::Number(p.net.mean * kMilli), CsvTable::Number(p.net.se * kMilli),
-           CsvTable::Number(p.truth_net.mean * kMilli), CsvTable::Number(p.eta.mean),
-           CsvTable::Number(p.truth_eta.mean), CsvTable::Number(p.power_rmse_pct_peak)});
-      points.push_back({{"amplitude_deg", p.amplitude_deg},
-                        {"load_J", StatsJson(p.load)},
-                        {"unload_J", StatsJson(p.unload)},
-                        {"net_J", StatsJson(p.net)},
-                        {"eta_pct", StatsJson(p.eta)},
-                        {"truth_load_J", StatsJson(p.truth_load)},
-                        {"truth_unload_J", StatsJson(p.truth_unload)},
-                        {"truth_net_J", StatsJson(p.truth_net)},
-                        {"truth_eta_pct", StatsJson(p.truth_eta)},
-                        {"power_rmse_pct_peak", p.power_rmse_pct_peak}});
+      const WorkPoint work{.amplitude_deg = p.amplitude_deg,
+                           .load = p.load,
+                           .unload = p.unload,
+                           .net = p.net,
+                           .reference_load = p.truth_load.mean,
+                           .reference_unload = p.truth_unload.mean,
+                           .reference_net = p.truth_net.mean};
+      Print(WorkCells(work) + " | " + Format("%.1f%%", p.eta.mean) + " | " +
+            Format("%.1f%%", p.truth_eta.mean) + " |\n");
+      std::vector<std::string> row = WorkCsvCells(s.subject, work);
+      row.insert(row.end(),
+                 {CsvTable::Number(p.eta.mean), CsvTable::Number(p.truth_eta.mean),
+                  CsvTable::Number(p.power_rmse_pct_peak)});
+      csv.AddRow(row);
+      nlohmann::json point = WorkJson(work);
+      point["eta_pct"] = StatsJson(p.eta);
+      point["truth_load_J"] = StatsJson(p.truth_load);
+      point["truth_unload_J"] = StatsJson(p.truth_unload);
+      point["truth_net_J"] = StatsJson(p.truth_net);
+      point["truth_eta_pct"] = StatsJson(p.truth_eta);
+      point["power_rmse_pct_peak"] = p.power_rmse_pct_peak;
+      points.push_back(std::move(point));
     }
     nlohmann::json subject = {{"subject", s.subject}, {"points", points}};
     AddErrorsJson(ErrorsOf(s), &subject);
@@ -461,29 +501,20 @@ void Report::Model(const std::vector<sim::ModelComparison>& comparisons) {
           "unloading model | net board | net model |\n|---|---|---|---|---|---|---|\n");
     nlohmann::json points = nlohmann::json::array();
     for (const auto& p : c.points) {
-      Print("| " + Format("%.0f°", p.amplitude_deg) + " | " +
-            PlusMinus(p.load, kMilli, "%.3f", true) + " | " +
-            Format("%.3f", p.model_load * kMilli) + " | " +
-            PlusMinus(p.unload, kMilli, "%.3f", true) + " | " +
-            Format("%.3f", p.model_unload * kMilli) + " | " +
-            PlusMinus(p.net, kMilli, "%.3f", true) + " | " +
-            Format("%.3f", p.model_net * kMilli) + " |\n");
-      csv.AddRow(
-          {c.subject, CsvTable::Number(p.amplitude_deg),
-           CsvTable::Number(p.load.mean * kMilli), CsvTable::Number(p.load.se * kMilli),
-           CsvTable::Number(p.model_load * kMilli),
-           CsvTable::Number(p.unload.mean * kMilli),
-           CsvTable::Number(p.unload.se * kMilli),
-           CsvTable::Number(p.model_unload * kMilli),
-           CsvTable::Number(p.net.mean * kMilli), CsvTable::Number(p.net.se * kMilli),
-           CsvTable::Number(p.model_net * kMilli)});
-      points.push_back({{"amplitude_deg", p.amplitude_deg},
-                        {"load_J", StatsJson(p.load)},
-                        {"unload_J", StatsJson(p.unload)},
-                        {"net_J", StatsJson(p.net)},
-                        {"model_load_J", p.model_load},
-                        {"model_unload_J", p.model_unload},
-                        {"model_net_J", p.model_net}});
+      const WorkPoint work{.amplitude_deg = p.amplitude_deg,
+                           .load = p.load,
+                           .unload = p.unload,
+                           .net = p.net,
+                           .reference_load = p.model_load,
+                           .reference_unload = p.model_unload,
+                           .reference_net = p.model_net};
+      Print(WorkCells(work) + " |\n");
+      csv.AddRow(WorkCsvCells(c.subject, work));
+      nlohmann::json point = WorkJson(work);
+      point["model_load_J"] = p.model_load;
+      point["model_unload_J"] = p.model_unload;
+      point["model_net_J"] = p.model_net;
+      points.push_back(std::move(point));
     }
     subjects.push_back({{"subject", c.subject},
                         {"model",

@@ -306,11 +306,10 @@ void ExpectBalanced(const Truth& t, const char* what) {
   EXPECT_LT(std::abs(t.balance_error_J), 1e-6 * t.dissipated.total_J) << what;
 }
 
-TEST(PlantEnergy, BalancesUnderClosedLoopDutyWithBridgeOffPhases) {
-  Plant plant(Quiet("subject1"));
-  // A PD loop on the motor encoder count, tracking 20° at 0.5 Hz; the bridge is off
-  // for 0.3 s in the middle (the supervisor's fault reaction), so the current-return
-  // path is exercised too.
+// 4 s of a PD loop on the motor encoder count, tracking 20° at 0.5 Hz; the bridge is
+// off for 0.3 s in the middle (the supervisor's fault reaction), so the current-return
+// path is exercised too. Returns the peak |motor current| (A).
+double RunClosedMotorLoop(Plant& plant) {
   mjc::MotorEncoderConfig config;
   mjc::MotorEncoderState state;
   mjc::MotorEncoder encoder(&config, &state);
@@ -328,6 +327,12 @@ TEST(PlantEnergy, BalancesUnderClosedLoopDutyWithBridgeOffPhases) {
     plant.Step(duty, !(t > 2.0 && t < 2.3), kTick_s);
     peak_current = std::max(peak_current, std::abs(plant.truth().motor_current_A));
   }
+  return peak_current;
+}
+
+TEST(PlantEnergy, BalancesUnderClosedLoopDutyWithBridgeOffPhases) {
+  Plant plant(Quiet("subject1"));
+  const double peak_current = RunClosedMotorLoop(plant);
   const Truth& t = plant.truth();
   EXPECT_GT(t.electrical_energy_J, 0.1);
   EXPECT_LT(peak_current, 12.0 / 13.7);  // below the stall current: a plausible motor
@@ -936,20 +941,7 @@ TEST(PlantPaperFidelity, ReproducesTheRk4ReferenceUnderAClosedMotorLoop) {
   // BalancesUnderClosedLoopDutyWithBridgeOffPhases (PD on the motor count, 0.3 s with the
   // bridge off), 4 s on subject 1.
   Plant plant(Quiet("subject1"));
-  mjc::MotorEncoderConfig config;
-  mjc::MotorEncoderState state;
-  mjc::MotorEncoder encoder(&config, &state);
-  encoder.Reconfigure();
-  encoder.Reset(plant.MotorCount());
-  double previous = 0.0;
-  for (int n = 1; n <= 40000; ++n) {
-    const double t = n * kTick_s;
-    const double setpoint = 20.0 * kDeg * std::sin(std::numbers::pi * t);
-    const double angle = encoder.Update(plant.MotorCount()).ToDouble();
-    const double speed = (angle - previous) / kTick_s;
-    previous = angle;
-    plant.Step(6.0 * (setpoint - angle) - 0.05 * speed, !(t > 2.0 && t < 2.3), kTick_s);
-  }
+  RunClosedMotorLoop(plant);
   const Truth& t = plant.truth();
   // RK4 at 2.5 µs. Measured: angles within 1.1e-7 rad, energies within 4e-6.
   EXPECT_NEAR(t.motor_pulley_angle_rad, -0.073109024, 1e-6);

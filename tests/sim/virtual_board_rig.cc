@@ -1,11 +1,9 @@
 #include "virtual_board_rig.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "mjc/host/calibration_io.h"
-#include "mjc/host/describe.h"
 #include "mjc/host/report.h"
 #include "mjc/host/units.h"
 
@@ -52,78 +50,15 @@ double CalibrationRun::worst_error_deg() const {
 CalibrationRun SweepAndFit(host::BoardClient& client, const protocol::SweepConfig& sweep,
                            const plant::PlantParams& plant) {
   CalibrationRun run;
-  std::string why;
-  // What the board holds: the new record keeps its stiffness and joint zero.
-  const auto held = host::ReadCalibration(client, &why);
-  if (!held) {
-    run.error = "cannot read the calibration in force: " + why;
-    return run;
-  }
-  const auto rate_hz = client.ReadParam(ParamId::kTelemetryAnglesHz, 500, &why);
-  if (!rate_hz || *rate_hz <= 0) {
-    run.error = "no angle telemetry rate: " + why;
-    return run;
-  }
-  if (!client.Send(sweep, &why)) {
-    run.error = why;
-    return run;
-  }
-  const auto outcome =
-      client.Command(CommandCode::kStartSweep, host::kStartAnswerMs, &why);
-  if (outcome != CommandOutcomeCode::kAccepted) {
-    run.error = "the sweep was not started: " +
-                (outcome ? std::string(host::OutcomeName(*outcome)) : why);
-    return run;
-  }
-
-  // The board's angles until it is idle again, at most twice the sweep's length of its
-  // own time (mjc calibrate's patience).
-  const std::uint64_t malformed_before = client.malformed();
-  client.TakeAngles();
-  client.KeepAngles(true);
-  std::vector<double> motor, joint;
-  bool sweeping_seen = false;
-  const auto finished = [&] {
-    for (const host::AngleSample& a : client.TakeAngles()) {
-      motor.push_back(a.motor_rad);
-      joint.push_back(a.joint_rad);
-    }
-    const BoardState state = client.status().state;
-    sweeping_seen = sweeping_seen || state == BoardState::kCalibrating;
-    return state == BoardState::kFault || (sweeping_seen && state == BoardState::kIdle);
-  };
-  const double sweep_s =
-      sweep.repetitions / (sweep.frequency_mHz / 1000.0) + 2 * sweep.rest_100ms / 10.0;
-  const host::Patience patience{
-      std::chrono::milliseconds(static_cast<long>(2000 * sweep_s) + 2000)};
-  host::WaitEnd end{};
-  const bool ended = client.Await(finished, patience, &end, &why);
-  client.KeepAngles(false);
-  run.samples = motor.size();
-  if (!ended) {
-    run.error = "the sweep did not end: " + why;
-    return run;
-  }
-  if (client.status().state == BoardState::kFault) {
-    run.error = "the board faulted during the sweep: fault " +
-                host::DescribeFault(client.status().fault);
-    return run;
-  }
-  // A lost sample shifts every later one: the lag fit would read it as lag.
-  if (client.malformed() != malformed_before) {
-    run.error = "malformed angle frames during the sweep";
-    return run;
-  }
-
   // Fitted and made into the record as `mjc calibrate` does (no robot description).
-  host::SweepCalibration fitted =
-      host::FitSweep(motor, std::move(joint), *rate_hz, held->record, nullptr, false);
-  run.fit = fitted.fit;
-  if (!fitted.record) {
-    run.error = "fit not usable: " + fitted.why;
+  host::SweepRun swept = host::RunSweep(client, sweep, nullptr, false);
+  run.samples = swept.samples.motor_rad.size();
+  if (swept.fitted) run.fit = swept.fitted->fit;
+  if (!swept.error.empty()) {
+    run.error = swept.error;
     return run;
   }
-  run.record = *fitted.record;
+  run.record = *swept.fitted->record;
   run.error_right_deg = host::RadToDeg(run.fit.c_right_rad - plant.cable.c_right_rad);
   run.error_left_deg = host::RadToDeg(run.fit.c_left_rad - plant.cable.c_left_rad);
   return run;

@@ -6,8 +6,8 @@
 //
 //  - The calibration: the sweep on the robot alone (SweepConfig + StartSweep), the
 //    board's angle telemetry recorded until it is idle again, c_r and c_l fitted with
-//    the joint's lag (host::FitBacklash, as mjc calibrate), the record to upload: the
-//    one the board holds with the fitted backlash. Its error is the fit's against the
+//    the joint's lag (host::RunSweep, with mjc calibrate's steps), the record to upload:
+//    the one the board holds with the fitted backlash. Its error is the fit's against the
 //    plant's slack (PlantParams::cable).
 //  - The trial: the amplitude protocol's sine run by host::RunBoardTrial; each of the
 //    middle three flexions (the paper's analysed ones) against the plant's interface

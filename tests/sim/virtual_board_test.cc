@@ -53,6 +53,11 @@ using namespace mjc::protocol;
 constexpr std::array<std::uint32_t, 3> kUniqueId = {0x0031002Au, 0x4D4B5012u,
                                                     0x20313739u};
 
+// A calibration upload's wait for the board's answer, in the board's own time (ample for
+// programming the record into its flash). The upload is host::UploadCalibration's on a
+// link of the in-process bus, as the simulator's scenarios send one.
+constexpr int kUploadPatienceMs = 10000;
+
 g474board::VirtualBoardConfig Config(const plant::PlantParams& params) {
   g474board::VirtualBoardConfig config;
   config.plant = params;
@@ -91,44 +96,6 @@ std::optional<CanFrame> AwaitFrame(host::CanLink& link, std::uint8_t node,
     }
     if (take(r->frame)) return r->frame;
   }
-}
-
-// A calibration record to `node` over ISO-TP on the in-process bus, segmented as the
-// kernel's sender does (a first frame, then consecutive frames; classical frames, no
-// padding). The frames go out together, which the board's flow control allows (block
-// size 0, STmin 0): its 1 s N_Cr cannot then run out while this thread waits for the
-// scheduler. Returns the board's answer [result, detail]; nullopt when the board has
-// run 10 s of its own time (its heartbeats' ticks) without one.
-std::optional<std::array<std::uint8_t, 2>> Upload(host::CanLink& link, std::uint8_t node,
-                                                  const CalibrationRecord& record) {
-  const auto bytes = EncodeCalibration(record);
-  const std::uint32_t to_board =
-      MakeId(static_cast<std::uint8_t>(Function::kIsoTpToBoard), node);
-  const std::uint32_t from_board =
-      MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard), node);
-  while (link.Receive(0)) {
-  }  // what the link heard before, not an answer
-  CanFrame f;
-  f.id = to_board;
-  f.length = 8;
-  f.data[0] = static_cast<std::uint8_t>(0x10u | (bytes.size() >> 8));
-  f.data[1] = static_cast<std::uint8_t>(bytes.size());
-  std::copy_n(bytes.begin(), 6, f.data.begin() + 2);
-  if (!link.Send(f, nullptr)) return std::nullopt;
-  std::uint8_t sequence = 1;
-  for (std::size_t at = 6; at < bytes.size(); at += 7, sequence = (sequence + 1) & 0x0F) {
-    const std::size_t n = std::min<std::size_t>(7, bytes.size() - at);
-    f.length = static_cast<std::uint8_t>(n + 1);
-    f.data[0] = static_cast<std::uint8_t>(0x20u | sequence);
-    std::copy_n(bytes.begin() + static_cast<std::ptrdiff_t>(at), n, f.data.begin() + 1);
-    if (!link.Send(f, nullptr)) return std::nullopt;
-  }
-  // The answer is a single frame of two bytes; the flow control (0x30) is not.
-  const auto answer = AwaitFrame(link, node, [&](const CanFrame& frame) {
-    return frame.id == from_board && frame.data[0] == 0x02;
-  });
-  if (!answer) return std::nullopt;
-  return std::array<std::uint8_t, 2>{answer->data[1], answer->data[2]};
 }
 
 // Until the board's first heartbeat: it is on the bus (a frame sent before its CAN
@@ -264,9 +231,10 @@ TEST(VirtualBoard, KeepsAnUploadedCalibrationOverAPowerCutAndARestart) {
     board.Resume();
     host::BoardClient client(host_link.get(), 1);
     AwaitUp(client);
-    const auto answer = Upload(*upload_link, 1, record);
-    ASSERT_TRUE(answer.has_value()) << "the board did not answer the upload";
-    EXPECT_EQ((*answer)[0], static_cast<std::uint8_t>(CalibrationResult::kAccepted));
+    const host::UploadOutcome sent =
+        host::UploadCalibration(client, *upload_link, record, kUploadPatienceMs, &why);
+    ASSERT_EQ(sent.status, host::UploadStatus::kAnswered) << why;
+    EXPECT_EQ(sent.result, CalibrationResult::kAccepted);
 
     // The power fails and comes back: the firmware boots again from the flash model.
     board.Halt();
@@ -327,9 +295,11 @@ TEST(VirtualBoard, CalibratesAndRunsATrialAgainstPlantTruth) {
         g474board::rig::SweepAndFit(client, g474board::rig::PaperSweep(), robot);
     ASSERT_TRUE(cal.error.empty()) << cal.error;
     EXPECT_LT(cal.worst_error_deg(), 0.05);
-    const auto answer = Upload(*upload_link, 1, cal.record);
-    ASSERT_TRUE(answer.has_value()) << "the board did not answer the upload";
-    EXPECT_EQ((*answer)[0], static_cast<std::uint8_t>(CalibrationResult::kAccepted));
+    std::string why;
+    const host::UploadOutcome sent = host::UploadCalibration(
+        client, *upload_link, cal.record, kUploadPatienceMs, &why);
+    ASSERT_EQ(sent.status, host::UploadStatus::kAnswered) << why;
+    EXPECT_EQ(sent.result, CalibrationResult::kAccepted);
     board.Stop();
     EXPECT_TRUE(board.violations().empty()) << Violations(board);
   }

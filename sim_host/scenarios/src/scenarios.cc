@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <exception>
 #include <mutex>
@@ -78,6 +77,27 @@ double Nrmse(const std::vector<double>& measured, const std::vector<double>& ref
   return range > 0 ? 100.0 * *rmse / range : 0.0;
 }
 
+// Tables II–III's errors across amplitudes, into *out's rmse_* (J) and nrmse_* (%): the
+// board's mean loading, unloading and net work at each amplitude of `measured` against
+// the truth at the same amplitude of `reference` (the board's own sweep, for its errors
+// against the plant, or the model's predicted sweep).
+template <class Errors>
+void SetEnergyErrors(const std::vector<AmplitudePoint>& measured,
+                     const std::vector<AmplitudePoint>& reference, Errors* out) {
+  std::vector<double> load, unload, net, ref_load, ref_unload, ref_net;
+  for (std::size_t i = 0; i < measured.size(); ++i) {
+    load.push_back(measured[i].load.mean);
+    unload.push_back(measured[i].unload.mean);
+    net.push_back(measured[i].net.mean);
+    ref_load.push_back(reference[i].truth_load.mean);
+    ref_unload.push_back(reference[i].truth_unload.mean);
+    ref_net.push_back(reference[i].truth_net.mean);
+  }
+  out->nrmse_load = Nrmse(load, ref_load, &out->rmse_load);
+  out->nrmse_unload = Nrmse(unload, ref_unload, &out->rmse_unload);
+  out->nrmse_net = Nrmse(net, ref_net, &out->rmse_net);
+}
+
 double EtaPercent(double load, double unload) {
   return load > 0 ? (1.0 - std::fabs(unload) / load) * 100.0 : 0.0;
 }
@@ -106,89 +126,36 @@ RampedSineConfig PaperCalibrationSweep() {
 CalibrationOutcome RunCalibration(BusBoard& bus, const RampedSineConfig& sweep,
                                   const CalibrationJoint& joint_of) {
   // As `mjc calibrate` (host_tools/mjc/calibrate.cc) over the bus, with the host
-  // library's functions: the record in force read, the sweep configured and started,
-  // the board's angle telemetry kept until it is idle again, the fit, the upload over
-  // ISO-TP, the record read back.
+  // library's functions: the sweep run and fitted (host::RunSweep: the record in force
+  // read, the sweep configured and started, the board's angle telemetry kept until it
+  // is idle again, the fit), the upload over ISO-TP, the record read back.
   CalibrationOutcome out;
   const plant::CableParams& cable = bus.plant().params().cable;
   out.true_c_right_rad = cable.c_right_rad;
   out.true_c_left_rad = cable.c_left_rad;
-  host::BoardClient& client = bus.client();
-  std::string why;
-  const auto held = host::ReadCalibration(client, &why);
-  if (!held) {
-    out.message = "cannot read the calibration in force: " + why;
-    return out;
-  }
-  const auto rate_hz = client.ReadParam(protocol::ParamId::kTelemetryAnglesHz, 500, &why);
-  if (!rate_hz || *rate_hz <= 0) {
-    out.message = "no angle telemetry to fit: " + why;
-    return out;
-  }
   protocol::SweepConfig config;
   config.end_amplitude = sweep.end_amplitude;
   SetWireTiming(sweep, &config);
-  if (!client.Send(config, &why)) {
-    out.message = why;
-    return out;
-  }
-  const auto started =
-      client.Command(protocol::CommandCode::kStartSweep, host::kStartAnswerMs, &why);
-  if (started != protocol::CommandOutcomeCode::kAccepted) {
-    out.message =
-        "the board refused the calibration sweep" +
-        (started ? ": " + std::string(host::OutcomeName(*started)) : ": " + why);
-    return out;
-  }
-  const std::uint64_t malformed_before = client.malformed();
-  std::vector<double> motor, joint;
-  client.TakeAngles();
-  client.KeepAngles(true);
-  const auto take_samples = [&] {
-    for (const host::AngleSample& a : client.TakeAngles()) {
-      motor.push_back(a.motor_rad);
-      joint.push_back(a.joint_rad);
-    }
-  };
-  const double sweep_s =
-      config.repetitions / (config.frequency_mHz / 1000.0) + 2 * config.rest_100ms / 10.0;
-  const host::Patience patience{
-      std::chrono::milliseconds(static_cast<long>(2000 * sweep_s) + 2000)};
-  host::WaitEnd end{};
-  const bool ended = client.AwaitMotionEnd(protocol::BoardState::kCalibrating,
-                                           take_samples, patience, &end, &why);
-  client.KeepAngles(false);
+  host::BoardClient& client = bus.client();
+  // No fitted_at in the record: a simulated run has no date, and its outputs are the
+  // same every run.
+  host::SweepRun run = host::RunSweep(client, config, joint_of.robot, joint_of.fit_alpha);
   // Fig. 7: θ_m, θ_j as the host received them.
-  out.motor_rad = motor;
-  out.joint_rad = joint;
-  if (!ended) {
-    out.message = "the sweep did not end: " + why;
+  out.motor_rad = std::move(run.samples.motor_rad);
+  out.joint_rad = std::move(run.samples.joint_rad);
+  if (run.fitted) {
+    out.fit = run.fitted->fit;
+    out.error_right_deg =
+        (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / std::numbers::pi;
+    out.error_left_deg =
+        (out.fit.c_left_rad - out.true_c_left_rad) * 180.0 / std::numbers::pi;
+  }
+  if (!run.error.empty()) {
+    out.message = run.error;
     return out;
   }
-  if (client.status().state == protocol::BoardState::kFault) {
-    out.message =
-        "the sweep faulted: fault " + host::DescribeFault(client.status().fault);
-    return out;
-  }
-  if (client.malformed() != malformed_before) {
-    out.message = "malformed angle frames during the sweep: not fitting it";
-    return out;
-  }
-  // Fitted and made into the record as `mjc calibrate` does (host::FitSweep). No
-  // fitted_at: a simulated run has no date, and its outputs are the same every run.
-  host::SweepCalibration fitted =
-      host::FitSweep(motor, std::move(joint), *rate_hz, held->record, joint_of.robot,
-                     joint_of.fit_alpha);
-  out.fit = fitted.fit;
-  out.error_right_deg =
-      (out.fit.c_right_rad - out.true_c_right_rad) * 180.0 / std::numbers::pi;
-  out.error_left_deg =
-      (out.fit.c_left_rad - out.true_c_left_rad) * 180.0 / std::numbers::pi;
-  if (!fitted.record) {
-    out.message = "calibration refused: " + fitted.why;
-    return out;
-  }
-  const protocol::CalibrationRecord& record = *fitted.record;
+  std::string why;
+  const protocol::CalibrationRecord& record = *run.fitted->record;
   out.record = {record.backlash, record.sea_stiffness, record.joint_zero_count};
   const auto isotp = bus.Connect();
   const host::UploadOutcome sent =
@@ -427,19 +394,8 @@ SubjectSweep SummariseSweep(const std::string& subject,
                             std::vector<AmplitudePoint> points) {
   SubjectSweep out;
   out.subject = subject;
-  std::vector<double> load, unload, net, tload, tunload, tnet;
-  for (const AmplitudePoint& pt : points) {
-    load.push_back(pt.load.mean);
-    unload.push_back(pt.unload.mean);
-    net.push_back(pt.net.mean);
-    tload.push_back(pt.truth_load.mean);
-    tunload.push_back(pt.truth_unload.mean);
-    tnet.push_back(pt.truth_net.mean);
-  }
   out.points = std::move(points);
-  out.nrmse_load = Nrmse(load, tload, &out.rmse_load);
-  out.nrmse_unload = Nrmse(unload, tunload, &out.rmse_unload);
-  out.nrmse_net = Nrmse(net, tnet, &out.rmse_net);
+  SetEnergyErrors(out.points, out.points, &out);
   return out;
 }
 
@@ -508,7 +464,6 @@ ModelComparison CompareWithModel(const SubjectSweep& measured,
   out.subject = measured.subject;
   out.identified = identified;
   out.model = model;
-  std::vector<double> load, unload, net, mload, munload, mnet;
   for (std::size_t i = 0; i < measured.points.size(); ++i) {
     const AmplitudePoint& m = measured.points[i];
     const AmplitudePoint& p = predicted.points[i];
@@ -517,16 +472,8 @@ ModelComparison CompareWithModel(const SubjectSweep& measured,
     }
     out.points.push_back({m.amplitude_deg, m.load, m.unload, m.net, p.truth_load.mean,
                           p.truth_unload.mean, p.truth_net.mean});
-    load.push_back(m.load.mean);
-    unload.push_back(m.unload.mean);
-    net.push_back(m.net.mean);
-    mload.push_back(p.truth_load.mean);
-    munload.push_back(p.truth_unload.mean);
-    mnet.push_back(p.truth_net.mean);
   }
-  out.nrmse_load = Nrmse(load, mload, &out.rmse_load);
-  out.nrmse_unload = Nrmse(unload, munload, &out.rmse_unload);
-  out.nrmse_net = Nrmse(net, mnet, &out.rmse_net);
+  SetEnergyErrors(measured.points, predicted.points, &out);
   return out;
 }
 

@@ -93,6 +93,15 @@ void Calibrate(Board& b) {
   b.Run(1);
 }
 
+// `config` and a StartTrial from the host (`sequence`, commanded by `session`, 0: none),
+// then `ticks` ticks.
+void StartTrial(Board& b, const TrialConfig& config, std::uint8_t sequence, int ticks = 1,
+                SessionId session = 0) {
+  b.node.HandleFrame(Encode(config, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, sequence, session}, 1));
+  b.Run(ticks);
+}
+
 MJC_VECTOR_TEST(CanNode, TrialStartedOverCanWithReplyTelemetryAndWindows) {
   static Board b;
   Calibrate(b);
@@ -101,9 +110,7 @@ MJC_VECTOR_TEST(CanNode, TrialStartedOverCanWithReplyTelemetryAndWindows) {
   t.frequency_mHz = 10000;  // 10 Hz: short cycles
   t.repetitions = 2;
   t.rest_100ms = 0;
-  b.node.HandleFrame(Encode(t, 1));
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 7}, 1));
-  b.Run(1);
+  StartTrial(b, t, 7);
   const protocol::CommandResult r = Last<protocol::CommandResult>(vt_context, b);
   VT_EXPECT_TRUE(r.outcome == CommandOutcomeCode::kAccepted);
   VT_EXPECT_EQ(r.sequence, 7);
@@ -139,9 +146,7 @@ MJC_VECTOR_TEST(CanNode, TrialRefusedWithoutConfigOrCalibration) {
                  CommandOutcomeCode::kRefusedInvalid);
   TrialConfig t;
   t.amplitude = Angle::FromDouble(0.2);
-  b.node.HandleFrame(Encode(t, 1));
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 2}, 1));
-  b.Run(1);
+  StartTrial(b, t, 2);
   VT_EXPECT_TRUE(Last<protocol::CommandResult>(vt_context, b).outcome ==
                  CommandOutcomeCode::kRefusedUncalibrated);
   VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
@@ -264,17 +269,13 @@ MJC_VECTOR_TEST(CanNode, WindowsLongerThanTheWireFieldAreRefused) {
   TrialConfig t;
   t.amplitude = Angle::FromDouble(0.2);
   t.frequency_mHz = 50;  // 10 s half-cycles: 100,000 ticks, beyond the 16-bit offsets
-  b.node.HandleFrame(Encode(t, 1));
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 20}, 1));
-  b.Run(2);
+  StartTrial(b, t, 20, 2);
   const protocol::CommandResult r = Last<protocol::CommandResult>(vt_context, b);
   VT_EXPECT_TRUE(r.outcome == CommandOutcomeCode::kRefusedInvalid);
   VT_EXPECT_EQ(r.detail, kDetailWindowTooLong);
   VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
   t.frequency_mHz = 80;  // 6.25 s half-cycles: 62,500 ticks fit
-  b.node.HandleFrame(Encode(t, 1));
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 21}, 1));
-  b.Run(2);
+  StartTrial(b, t, 21, 2);
   VT_EXPECT_TRUE(Last<protocol::CommandResult>(vt_context, b).outcome ==
                  CommandOutcomeCode::kAccepted);
   VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
@@ -300,17 +301,19 @@ MJC_VECTOR_TEST(CanNode, ParameterWritesKeepTheClockAndTelemetryRunning) {
   VT_EXPECT_TRUE(Last<Heartbeat>(vt_context, b).tick > tick_before + 1000);
 }
 
-// A trial long enough to outlast the tests below: 0.5 Hz, 5 repetitions.
-// Starts a 10 s trial commanded by `session` (0: none).
-void StartLongTrial(Board& b, std::uint8_t sequence, SessionId session = 0) {
+// A trial long enough to outlast the tests below: 0.5 Hz, 5 repetitions, 10 s.
+TrialConfig LongTrial() {
   TrialConfig t;
   t.amplitude = Angle::FromDouble(0.2);
   t.frequency_mHz = 500;
   t.repetitions = 5;
   t.rest_100ms = 0;
-  b.node.HandleFrame(Encode(t, 1));
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, sequence, session}, 1));
-  b.Run(1);
+  return t;
+}
+
+// Starts the long trial, commanded by `session` (0: none).
+void StartLongTrial(Board& b, std::uint8_t sequence, SessionId session = 0) {
+  StartTrial(b, LongTrial(), sequence, 1, session);
 }
 
 MJC_VECTOR_TEST(CanNode, LostHostHeartbeatStopsAMotionButNotARest) {
@@ -381,12 +384,7 @@ MJC_VECTOR_TEST(CanNode, LostHostHeartbeatStopsAMotionButNotARest) {
 MJC_VECTOR_TEST(CanNode, OneStartAtATimeAwaitsItsVerdict) {
   static Board b;
   Calibrate(b);
-  TrialConfig t;
-  t.amplitude = Angle::FromDouble(0.2);
-  t.frequency_mHz = 500;
-  t.repetitions = 5;
-  t.rest_100ms = 0;
-  b.node.HandleFrame(Encode(t, 1));
+  b.node.HandleFrame(Encode(LongTrial(), 1));
   // Two starts before the tick took the first: the second is refused as busy at once.
   b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 1, 0x1111}, 1));
   b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 2, 0x2222}, 1));

@@ -134,10 +134,7 @@ std::optional<protocol::BootResult> Board::LastResult() {
   return results.back();
 }
 
-std::optional<protocol::BootResult> HostUpdate::Request(
-    Board& board, std::span<const std::uint8_t> payload, int patience) {
-  board.can.from_board.clear();
-  board.SendIsoTp(payload);
+std::optional<protocol::BootResult> HostUpdate::AwaitResult(Board& board, int patience) {
   for (int i = 0; i < patience; ++i) {
     (void)board.Step();
     if (auto r = board.LastResult()) {
@@ -148,6 +145,13 @@ std::optional<protocol::BootResult> HostUpdate::Request(
   return std::nullopt;
 }
 
+std::optional<protocol::BootResult> HostUpdate::Request(
+    Board& board, std::span<const std::uint8_t> payload, int patience) {
+  board.can.from_board.clear();
+  board.SendIsoTp(payload);
+  return AwaitResult(board, patience);
+}
+
 std::optional<protocol::BootResult> HostUpdate::Command(Board& board,
                                                         protocol::BootRequest request,
                                                         int patience) {
@@ -156,14 +160,7 @@ std::optional<protocol::BootResult> HostUpdate::Command(Board& board,
   c.request = request;
   c.sequence = 7;
   board.Send(protocol::Encode(c, kNode));
-  for (int i = 0; i < patience; ++i) {
-    (void)board.Step();
-    if (auto r = board.LastResult()) {
-      results.push_back(*r);
-      return r;
-    }
-  }
-  return std::nullopt;
+  return AwaitResult(board, patience);
 }
 
 bool HostUpdate::Run(Board& board, std::span<const std::uint8_t> file,

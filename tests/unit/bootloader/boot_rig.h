@@ -160,6 +160,11 @@ struct HostUpdate {
       Board& board, std::span<const std::uint8_t> iso_tp_payload, int patience = 50);
   std::optional<protocol::BootResult> Command(Board& board, protocol::BootRequest r,
                                               int patience = 50);
+
+ private:
+  // The board's answer to what was just sent, kept in `results`; nullopt: none within
+  // `patience` polls.
+  std::optional<protocol::BootResult> AwaitResult(Board& board, int patience);
 };
 
 }  // namespace mjc::boot::test

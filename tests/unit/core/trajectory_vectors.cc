@@ -82,26 +82,24 @@ std::int64_t CycleTicks(Frequency f, double tick_rate_hz) {
   return 4 * std::llround(tick_rate_hz / (4.0 * f.ToDouble()));
 }
 
-Trial TrialOf(const SineConfig& c) {
+// The shape of either configuration, its amplitude going from `start_amplitude` to
+// `end_amplitude` over the cycles.
+template <class Config>
+Trial TrialOf(const Config& c, Angle start_amplitude, Angle end_amplitude) {
   const double tick = c.tick_rate_hz;
   return {c.neutral.ToDouble(),
-          c.amplitude.ToDouble(),
-          c.amplitude.ToDouble(),
+          start_amplitude.ToDouble(),
+          end_amplitude.ToDouble(),
           std::llround(c.rest_ms * tick / 1000.0),
           CycleTicks(c.frequency, tick),
           c.repetitions,
           tick};
 }
 
+Trial TrialOf(const SineConfig& c) { return TrialOf(c, c.amplitude, c.amplitude); }
+
 Trial TrialOf(const RampedSineConfig& c) {
-  const double tick = c.tick_rate_hz;
-  return {c.neutral.ToDouble(),
-          c.start_amplitude.ToDouble(),
-          c.end_amplitude.ToDouble(),
-          std::llround(c.rest_ms * tick / 1000.0),
-          CycleTicks(c.frequency, tick),
-          c.repetitions,
-          tick};
+  return TrialOf(c, c.start_amplitude, c.end_amplitude);
 }
 
 struct Label {
@@ -230,6 +228,18 @@ void ExpectTransitions(mjc::vt::Context& vt_context, const LabelList& got,
   VT_EXPECT_EQ(mismatches, 0);
 }
 
+// A whole run against the reference: the setpoints within `position_lsb` and
+// `velocity_lsb` (the bounds of the file's head), every tick's label and every rest
+// tick exact, and the first tick of every segment.
+void ExpectReference(mjc::vt::Context& vt_context, const TrialResult& r,
+                     const Trial& trial, double position_lsb, double velocity_lsb) {
+  VT_EXPECT_LE(r.position_lsb, position_lsb);
+  VT_EXPECT_LE(r.velocity_lsb, velocity_lsb);
+  VT_EXPECT_EQ(r.label_mismatches, 0);
+  VT_EXPECT_EQ(r.rest_mismatches, 0);
+  ExpectTransitions(vt_context, r.transitions, ExpectedTransitions(trial));
+}
+
 // The paper's trial: 5 repetitions at 0.5 Hz, 3 s rest, 25° about a 0.2 rad neutral.
 SineConfig PaperTrial() {
   SineConfig c;
@@ -253,11 +263,7 @@ MJC_VECTOR_TEST(SineTrajectory, PaperTrialMatchesDoubleReference) {
 
   const TrialResult r = RunTrial(generator, trial, 1000);
   // A = 0.436 rad, V = 1.37 rad/s: 0.517 and 1.003 LSB.
-  VT_EXPECT_LE(r.position_lsb, 0.55);
-  VT_EXPECT_LE(r.velocity_lsb, 1.05);
-  VT_EXPECT_EQ(r.label_mismatches, 0);
-  VT_EXPECT_EQ(r.rest_mismatches, 0);
-  ExpectTransitions(vt_context, r.transitions, ExpectedTransitions(trial));
+  ExpectReference(vt_context, r, trial, 0.55, 1.05);
   VT_EXPECT_EQ(r.transitions.size, 23);  // rest, 5 × 4 segments, rest, idle
   VT_EXPECT_TRUE(generator.mode() == TrajectoryMode::kIdle);
   VT_EXPECT_TRUE(generator.position() == config.neutral);
@@ -293,11 +299,7 @@ MJC_VECTOR_TEST(SineTrajectory, SegmentBoundariesAreTickExact) {
     VT_EXPECT_EQ(trial.cycle, k.cycle);
     VT_EXPECT_EQ(static_cast<std::int64_t>(generator.ticks_per_cycle()), k.cycle);
     const TrialResult r = RunTrial(generator, trial);
-    VT_EXPECT_EQ(r.label_mismatches, 0);
-    VT_EXPECT_EQ(r.rest_mismatches, 0);
-    ExpectTransitions(vt_context, r.transitions, ExpectedTransitions(trial));
-    VT_EXPECT_LE(r.position_lsb, 0.55);
-    VT_EXPECT_LE(r.velocity_lsb, 1.05);
+    ExpectReference(vt_context, r, trial, 0.55, 1.05);
   }
 }
 
@@ -403,11 +405,7 @@ MJC_VECTOR_TEST(SweepTrajectory, EnvelopeMatchesDoubleReference) {
   TrajectoryGenerator generator;
   VT_EXPECT_EQ(Code(generator.StartSweep(config)), Code(TrajectoryError::kOk));
   const TrialResult r = RunTrial(generator, trial);
-  VT_EXPECT_LE(r.position_lsb, 1.05);
-  VT_EXPECT_LE(r.velocity_lsb, 2.2);
-  VT_EXPECT_EQ(r.label_mismatches, 0);
-  VT_EXPECT_EQ(r.rest_mismatches, 0);
-  ExpectTransitions(vt_context, r.transitions, ExpectedTransitions(trial));
+  ExpectReference(vt_context, r, trial, 1.05, 2.2);
 
   // Envelope: |position − neutral| at each peak and trough is A(k) itself (sin = ±1
   // exactly there, so the product is exact): only the ramp's rounding, <= 0.5 LSB.
@@ -455,11 +453,7 @@ MJC_VECTOR_TEST(SweepTrajectory, FromZeroAndDecreasing) {
     VT_EXPECT_TRUE(generator.mode() == TrajectoryMode::kSweep);
     const Trial trial = TrialOf(config);
     const TrialResult r = RunTrial(generator, trial);
-    VT_EXPECT_LE(r.position_lsb, 1.05);
-    VT_EXPECT_LE(r.velocity_lsb, 2.2);
-    VT_EXPECT_EQ(r.label_mismatches, 0);
-    VT_EXPECT_EQ(r.rest_mismatches, 0);
-    ExpectTransitions(vt_context, r.transitions, ExpectedTransitions(trial));
+    ExpectReference(vt_context, r, trial, 1.05, 2.2);
   }
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -76,6 +77,22 @@ UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
                                 const protocol::CalibrationRecord& record, int timeout_ms,
                                 std::string* why);
 
+// The board's angle telemetry over the calibration sweep it has just started, recorded
+// as `mjc calibrate` and the paper's scenarios record it: every angle sample `board`
+// receives until the board leaves kCalibrating. Followed at the board's pace (Patience):
+// at most twice the sweep's `length_s` in the board's time, plus 2 s, and the board may
+// not fall silent. `each`, when given, runs on every pass of the wait after the new
+// samples are taken (a caller's progress line). The samples are kept however the wait
+// ended.
+struct SweepSamples {
+  std::vector<double> motor_rad, joint_rad;
+  bool ended = false;  // the board left kCalibrating; if not, `end` and *why say how
+  WaitEnd end{};
+  std::uint64_t malformed = 0;  // frames `board` found malformed while recording
+};
+SweepSamples RecordSweep(BoardClient& board, double length_s,
+                         const std::function<void()>& each, std::string* why);
+
 // A calibration sweep fitted and turned into the record to upload, as `mjc calibrate`
 // does it (and the paper's scenarios and the virtual board's rig, through this one
 // function):
@@ -98,6 +115,20 @@ SweepCalibration FitSweep(std::span<const double> motor_rad,
                           std::vector<double> joint_rad, double rate_hz,
                           const protocol::CalibrationRecord& held,
                           const RobotDescription* robot, bool fit_alpha);
+
+// A calibration sweep run on `board` (idle, on the robot alone) and fitted, with mjc
+// calibrate's steps but none of its files, progress or emergency stop: the record in
+// force read (the new one keeps what it holds), the angle telemetry's rate read,
+// `sweep` configured and started, its samples recorded (RecordSweep, the patience from
+// the sweep's own length) and fitted (FitSweep with `robot` and `fit_alpha`). How the
+// paper's scenarios and the virtual board's tests calibrate a board over the bus.
+struct SweepRun {
+  SweepSamples samples;                    // as recorded, however the sweep ended
+  std::optional<SweepCalibration> fitted;  // once the samples were fitted
+  std::string error;  // empty: fitted->record is the record to upload; else why not
+};
+SweepRun RunSweep(BoardClient& board, const protocol::SweepConfig& sweep,
+                  const RobotDescription* robot, bool fit_alpha);
 
 struct BoardCalibration {
   // c_r, c_l, α, stiffness and joint zero count in force. The fit fields are not

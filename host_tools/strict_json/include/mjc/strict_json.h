@@ -103,14 +103,22 @@ class FieldReader {
   // The object `key` of the top level, every key of it in `known`.
   const Json& Section(const Json& root, std::string_view key,
                       std::span<const std::string_view> known) const {
-    const Json& section = Get(root, "", key);
+    const Json& section = Value(root, "", key);
     if (!section.is_object()) Fail(key, "must be an object");
     CheckKnown(section, std::string(key) + ".", known);
     return section;
   }
 
+  // The member `key` as it is, of any type (null too).
+  const Json& Value(const Json& object, std::string_view prefix,
+                    std::string_view key) const {
+    const Json* v = Member(object, key);
+    if (v == nullptr) Fail(FieldName(prefix, key), "is missing");
+    return *v;
+  }
+
   double Double(const Json& object, std::string_view prefix, std::string_view key) const {
-    const Json& v = Get(object, prefix, key);
+    const Json& v = Value(object, prefix, key);
     if (!v.is_number()) Fail(FieldName(prefix, key), "must be a number");
     return v.template get<double>();
   }
@@ -118,7 +126,7 @@ class FieldReader {
   // An integer within [lo, hi].
   std::int64_t Integer(const Json& object, std::string_view prefix, std::string_view key,
                        std::int64_t lo, std::int64_t hi) const {
-    const Json& v = Get(object, prefix, key);
+    const Json& v = Value(object, prefix, key);
     const std::string name = FieldName(prefix, key);
     if (!v.is_number_integer()) Fail(name, "must be an integer");
     const bool too_big = v.is_number_unsigned() &&
@@ -133,33 +141,26 @@ class FieldReader {
 
   std::uint64_t Unsigned64(const Json& object, std::string_view prefix,
                            std::string_view key) const {
-    const Json& v = Get(object, prefix, key);
+    const Json& v = Value(object, prefix, key);
     if (!v.is_number_unsigned())
       Fail(FieldName(prefix, key), "must be a non-negative integer");
     return v.template get<std::uint64_t>();
   }
 
   bool Bool(const Json& object, std::string_view prefix, std::string_view key) const {
-    const Json& v = Get(object, prefix, key);
+    const Json& v = Value(object, prefix, key);
     if (!v.is_boolean()) Fail(FieldName(prefix, key), "must be true or false");
     return v.template get<bool>();
   }
 
   std::string String(const Json& object, std::string_view prefix,
                      std::string_view key) const {
-    const Json& v = Get(object, prefix, key);
+    const Json& v = Value(object, prefix, key);
     if (!v.is_string()) Fail(FieldName(prefix, key), "must be a string");
     return v.template get<std::string>();
   }
 
  private:
-  const Json& Get(const Json& object, std::string_view prefix,
-                  std::string_view key) const {
-    const Json* v = Member(object, key);
-    if (v == nullptr) Fail(FieldName(prefix, key), "is missing");
-    return *v;
-  }
-
   std::string_view source_;
 };
 
