@@ -101,10 +101,15 @@ inline double TanhByExp(double y) {
   return std::copysign((1.0 - e) / (1.0 + e), y);
 }
 
-void CheckStep(double dt_s) {
-  if (!(dt_s > 0.0 && dt_s <= kMaxCallStep_s)) {
-    throw std::invalid_argument("Plant: dt_s = " + std::to_string(dt_s) +
-                                " s is outside (0, 0.01]");
+[[noreturn, gnu::cold]] void ThrowBadStep(double dt_s) {
+  throw std::invalid_argument("Plant: dt_s = " + std::to_string(dt_s) +
+                              " s is outside (0, 0.01]");
+}
+
+// Inline, with the message built out of line: every tick calls it.
+inline void CheckStep(double dt_s) {
+  if (!(dt_s > 0.0 && dt_s <= kMaxCallStep_s)) [[unlikely]] {
+    ThrowBadStep(dt_s);
   }
 }
 
