@@ -101,10 +101,15 @@ inline double TanhByExp(double y) {
   return std::copysign((1.0 - e) / (1.0 + e), y);
 }
 
-void CheckStep(double dt_s) {
-  if (!(dt_s > 0.0 && dt_s <= kMaxCallStep_s)) {
-    throw std::invalid_argument("Plant: dt_s = " + std::to_string(dt_s) +
-                                " s is outside (0, 0.01]");
+[[noreturn, gnu::cold]] void ThrowBadStep(double dt_s) {
+  throw std::invalid_argument("Plant: dt_s = " + std::to_string(dt_s) +
+                              " s is outside (0, 0.01]");
+}
+
+// Inline, with the message built out of line: every tick calls it.
+inline void CheckStep(double dt_s) {
+  if (!(dt_s > 0.0 && dt_s <= kMaxCallStep_s)) [[unlikely]] {
+    ThrowBadStep(dt_s);
   }
 }
 
@@ -315,47 +320,57 @@ bool Plant::Substep(const Drive& drive, const SubstepConstants& k, const State& 
   constexpr double kTolerance = 1e-12;
   constexpr double kFloor_Nm = 1e-15;
   for (int iteration = 0;; ++iteration) {
+    // The residuals first; the Jacobian only when they ask for another step (the last
+    // evaluation of every substep does not).
     const double rate = alpha * wm - wc;  // the right contact closing
     right = ContactOver(delta_r0, rate, h, k.contact_slope, c);
     left = ContactOver(delta_l0, -rate, h, k.contact_slope, c);
     const double contact = right.torque - left.torque;
-    const double contact_slope = right.slope + left.slope;
 
-    double bristle_torque = 0, bristle_slope = 0;
+    double bristle_torque = 0, inv_den = 0;
     if (bristle) {
-      const double inv_den = 1.0 / (1.0 + half_relax * std::abs(wc));
+      inv_den = 1.0 / (1.0 + half_relax * std::abs(wc));
       z = (z0 + half_h * wc) * inv_den;
       bristle_torque = sigma * z;
+    }
+    const double cable_linear = k.cable_diagonal * wc;
+    const double r_cable = cable_linear + cable_rest - contact + bristle_torque;
+    const bool cable_converged =
+        std::abs(r_cable) <= kTolerance * (std::abs(cable_linear) + std::abs(cable_rest) +
+                                           std::abs(contact) + std::abs(bristle_torque)) +
+                                 kFloor_Nm;
+
+    double t = 0, r_rotor = 0;
+    if (motor_free) {
+      if (coulomb_reflected_ > 0.0) {
+        t = TanhByExp(coulomb_gain_ * wm);
+        coulomb = coulomb_reflected_ * t;
+      }
+      const double rotor_linear = rotor_diagonal * wm;
+      r_rotor = rotor_linear + rotor_rest + coulomb + alpha * contact;
+      if (cable_converged &&
+          std::abs(r_rotor) <=
+              kTolerance * (std::abs(rotor_linear) + std::abs(rotor_rest) +
+                            std::abs(coulomb) + std::abs(alpha * contact)) +
+                  kFloor_Nm) {
+        break;
+      }
+    } else if (cable_converged) {
+      break;
+    }
+    if (iteration == kMaxIterations) return false;
+
+    const double contact_slope = right.slope + left.slope;
+    double bristle_slope = 0;
+    if (bristle) {
       const double z_along = wc < 0.0 ? -z : z;
       // Never below zero: a bristle carried past F_c/σ0 by a very fast substep would
       // otherwise give a falling slope.
       bristle_slope = std::max(0.0, half_sigma * (1.0 - relax * z_along) * inv_den);
     }
-    const double cable_linear = k.cable_diagonal * wc;
-    const double r_cable = cable_linear + cable_rest - contact + bristle_torque;
-    const double cable_tolerance =
-        kTolerance * (std::abs(cable_linear) + std::abs(cable_rest) + std::abs(contact) +
-                      std::abs(bristle_torque)) +
-        kFloor_Nm;
     const double j_cable = k.cable_diagonal + contact_slope + bristle_slope;
-
     if (motor_free) {
-      double coulomb_slope = 0;
-      if (coulomb_reflected_ > 0.0) {
-        const double t = TanhByExp(coulomb_gain_ * wm);
-        coulomb = coulomb_reflected_ * t;
-        coulomb_slope = coulomb_reflected_ * coulomb_gain_ * (1.0 - t * t);
-      }
-      const double rotor_linear = rotor_diagonal * wm;
-      const double r_rotor = rotor_linear + rotor_rest + coulomb + alpha * contact;
-      if (std::abs(r_rotor) <=
-              kTolerance * (std::abs(rotor_linear) + std::abs(rotor_rest) +
-                            std::abs(coulomb) + std::abs(alpha * contact)) +
-                  kFloor_Nm &&
-          std::abs(r_cable) <= cable_tolerance) {
-        break;
-      }
-      if (iteration == kMaxIterations) return false;
+      const double coulomb_slope = coulomb_reflected_ * coulomb_gain_ * (1.0 - t * t);
       // The 2×2 symmetric Jacobian [a b; b d].
       const double a = rotor_diagonal + coulomb_slope + alpha * alpha * contact_slope;
       const double b = -alpha * contact_slope;
@@ -363,8 +378,6 @@ bool Plant::Substep(const Drive& drive, const SubstepConstants& k, const State& 
       wm -= (j_cable * r_rotor - b * r_cable) * inv_det;
       wc -= (a * r_cable - b * r_rotor) * inv_det;
     } else {
-      if (std::abs(r_cable) <= cable_tolerance) break;
-      if (iteration == kMaxIterations) return false;
       wc -= r_cable / j_cable;
     }
   }
