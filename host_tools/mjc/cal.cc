@@ -40,10 +40,13 @@ std::string Describe(const protocol::CalibrationRecord& r) {
   char text[512];
   std::snprintf(text, sizeof text,
                 "backlash   c_right %+.4f°  c_left %+.4f°  alpha %.4f\n"
+                "cable      friction %.3f N·m%s\n"
                 "SEA        stiffness %.4f N·m/rad\n"
                 "joint      zero count %u\n",
                 host::RadToDeg(r.backlash.c_right.ToDouble()),
                 host::RadToDeg(r.backlash.c_left.ToDouble()), r.backlash.alpha.ToDouble(),
+                r.backlash.cable_friction.ToDouble(),
+                r.backlash.cable_friction == Torque{} ? " (not modelled)" : "",
                 r.sea_stiffness.ToDouble(), static_cast<unsigned>(r.joint_zero_count));
   std::string out = text;
   if (r.fitted_at_unix_s != 0) {

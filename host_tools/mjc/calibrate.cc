@@ -56,9 +56,8 @@ void WriteSweep(const std::filesystem::path& path, int rate_hz,
 }
 
 bool SameCalibration(const CalibrationRecord& a, const CalibrationRecord& b) {
-  return a.backlash.c_right == b.backlash.c_right &&
-         a.backlash.c_left == b.backlash.c_left && a.backlash.alpha == b.backlash.alpha &&
-         a.sea_stiffness == b.sea_stiffness && a.joint_zero_count == b.joint_zero_count;
+  return a.backlash == b.backlash && a.sea_stiffness == b.sea_stiffness &&
+         a.joint_zero_count == b.joint_zero_count;
 }
 
 }  // namespace
@@ -90,7 +89,7 @@ void AddCalibrate(CLI::App& app) {
   auto* robot_option = cmd->add_option(
       "--robot", robot_path,
       "Robot description of the joint (robots/*.json): the fit takes its α = r_m/r_j, "
-      "the record its SEA stiffness K = 2kr_j² and joint zero");
+      "the record its SEA stiffness K = 2kr_j², cable friction and joint zero");
   cmd->add_flag("--fit-alpha", fit_alpha,
                 "Fit α too, within ±20 % of the description's (a fit on a bound is "
                 "refused)")
@@ -280,13 +279,17 @@ void AddCalibrate(CLI::App& app) {
           motor.size(), *rate_hz, host::RadToDeg(fit.c_right_rad),
           host::RadToDeg(fit.c_left_rad), fit.lag_s * 1e3,
           host::RadToDeg(fit.rms_error_rad), fit.elapsed_ms);
-      std::printf("α %.4f (%s), SEA stiffness %.4f N·m/rad and joint zero %u (%s)\n",
-                  record.backlash.alpha.ToDouble(),
-                  !robot      ? "assumed 1, no --robot"
-                  : fit_alpha ? "fitted within ±20 % of the description's"
-                              : "the description's",
-                  record.sea_stiffness.ToDouble(), unsigned{record.joint_zero_count},
-                  robot ? ("from " + robot->name).c_str() : "kept from the board");
+      std::printf(
+          "α %.4f (%s), SEA stiffness %.4f N·m/rad, cable friction %.3f N·m%s and joint "
+          "zero %u (%s)\n",
+          record.backlash.alpha.ToDouble(),
+          !robot      ? "assumed 1, no --robot"
+          : fit_alpha ? "fitted within ±20 % of the description's"
+                      : "the description's",
+          record.sea_stiffness.ToDouble(), record.backlash.cable_friction.ToDouble(),
+          record.backlash.cable_friction == Torque{} ? " (not modelled)" : "",
+          unsigned{record.joint_zero_count},
+          robot ? ("from " + robot->name).c_str() : "kept from the board");
       // Saved before the upload, so a failed upload loses nothing: `mjc cal upload`
       // sends the file later.
       host::WriteFile(out_path, host::CalibrationToJson(record).dump(2) + "\n");

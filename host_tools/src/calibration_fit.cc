@@ -556,6 +556,8 @@ std::optional<BacklashConfig> ToFirmwareConfig(const BacklashFit& fit, std::stri
       return refuse("c_left = " + Degrees(fit.c_left_rad) + " is above c_right = " +
                     Degrees(fit.c_right_rad) + ": the legal range of c_left is [" +
                     Degrees(-kMaxOffsetRad) + ", c_right]");
+    case BacklashConfigError::kFrictionOutOfRange:  // the fit leaves τ_f at 0
+      return refuse("the cable friction is outside the firmware's legal range");
   }
   return refuse("the firmware refused the config with an unknown code");
 }

@@ -27,6 +27,8 @@ nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& r) {
           {"c_left_deg", RadToDeg(r.backlash.c_left.ToDouble())},
           {"alpha", r.backlash.alpha.ToDouble()},
           {"sea_stiffness_Nm_per_rad", r.sea_stiffness.ToDouble()},
+          {"cable_friction_Nm",
+           protocol::CableFrictionMilliNm(r.backlash.cable_friction) / 1000.0},
           {"joint_zero_count", r.joint_zero_count},
           {"fit_rms_urad", r.fit_rms_urad},
           {"fit_lag_us", r.fit_lag_us},
@@ -75,19 +77,31 @@ std::optional<protocol::CalibrationRecord> CalibrationFromJson(
   };
   using U32 = std::numeric_limits<std::uint32_t>;
   double c_right = 0, c_left = 0, alpha = 0, stiffness = 0;
+  double friction = 0;  // absent: not modelled (a file from before the field)
   if (!number("c_right_deg", &c_right) || !number("c_left_deg", &c_left) ||
       !number("alpha", &alpha) || !number("sea_stiffness_Nm_per_rad", &stiffness) ||
       !integer("joint_zero_count", 16383, true, &r.joint_zero_count) ||
       !integer("fit_rms_urad", U32::max(), false, &r.fit_rms_urad) ||
       !integer("fit_lag_us", U32::max(), false, &r.fit_lag_us) ||
       !integer("fitted_at_unix_s", std::numeric_limits<std::uint64_t>::max(), false,
-               &r.fitted_at_unix_s)) {
+               &r.fitted_at_unix_s) ||
+      (j.contains("cable_friction_Nm") && !number("cable_friction_Nm", &friction))) {
+    return std::nullopt;
+  }
+  if (friction < 0 || friction > kMaxCableFriction.ToDouble()) {
+    char text[128];
+    std::snprintf(text, sizeof text,
+                  "calibration: field 'cable_friction_Nm' = %g is outside [0, %g] N·m",
+                  friction, kMaxCableFriction.ToDouble());
+    *why = text;
     return std::nullopt;
   }
   r.backlash.c_right = Angle::Quantize(DegToRad(c_right));
   r.backlash.c_left = Angle::Quantize(DegToRad(c_left));
   r.backlash.alpha = Scale::Quantize(alpha);
   r.sea_stiffness = Stiffness::Quantize(stiffness);
+  r.backlash.cable_friction = protocol::CableFrictionFromMilliNm(
+      static_cast<std::uint16_t>(std::lround(friction * 1000.0)));
   // The board's checks, run here first, so a bad file never reaches the bus.
   const auto bytes = protocol::EncodeCalibration(r);
   protocol::CalibrationRecord checked;
@@ -325,6 +339,7 @@ SweepCalibration FitSweep(std::span<const double> motor_rad,
   if (!backlash) return out;
   protocol::CalibrationRecord record = held;
   record.backlash = *backlash;
+  record.backlash.cable_friction = held.backlash.cable_friction;  // not the fit's
   if (robot != nullptr) UseRobotJoint(*robot, &record);
   record.fit_rms_urad =
       static_cast<std::uint32_t>(std::lround(out.fit.rms_error_rad * 1e6));
@@ -382,11 +397,12 @@ SweepRun RunSweep(BoardClient& board, const protocol::SweepConfig& sweep,
 
 std::optional<BoardCalibration> ReadCalibration(BoardClient& board, std::string* why) {
   using protocol::ParamId;
-  std::int32_t value[6] = {};
-  const ParamId ids[6] = {ParamId::kCalibrated,           ParamId::kCalibrationRight,
+  std::int32_t value[7] = {};
+  const ParamId ids[7] = {ParamId::kCalibrated,           ParamId::kCalibrationRight,
                           ParamId::kCalibrationLeft,      ParamId::kCalibrationAlpha,
-                          ParamId::kCalibrationStiffness, ParamId::kCalibrationJointZero};
-  for (int i = 0; i < 6; ++i) {
+                          ParamId::kCalibrationStiffness, ParamId::kCalibrationJointZero,
+                          ParamId::kCalibrationFriction};
+  for (int i = 0; i < 7; ++i) {
     const auto v = board.ReadParam(ids[i], 500, why);
     if (!v) return std::nullopt;
     value[i] = *v;
@@ -403,6 +419,7 @@ std::optional<BoardCalibration> ReadCalibration(BoardClient& board, std::string*
   out.record.backlash.alpha = Scale::FromRaw(value[3]);
   out.record.sea_stiffness = Stiffness::FromRaw(value[4]);
   out.record.joint_zero_count = static_cast<std::uint16_t>(value[5]);
+  out.record.backlash.cable_friction = Torque::FromRaw(value[6]);
   return out;
 }
 

@@ -261,6 +261,8 @@ std::string DescribeCalibrationResult(protocol::CalibrationResult result,
           return "an offset outside ±28.6° (0.5 rad)";
         case static_cast<std::uint8_t>(BacklashConfigError::kLeftAboveRight):
           return "c_left above c_right";
+        case static_cast<std::uint8_t>(BacklashConfigError::kFrictionOutOfRange):
+          return "cable friction outside [0, 5] N·m";
         case static_cast<std::uint8_t>(CalibrationError::kStiffness):
           return "SEA stiffness outside (0, 100] N·m/rad";
         case static_cast<std::uint8_t>(CalibrationError::kJointZero):

@@ -26,6 +26,7 @@ constexpr std::string_view kMotorEncoderKeys[] = {"counts_per_rev", "gear_ratio"
                                                   "count_at_zero"};
 constexpr std::string_view kJointEncoderKeys[] = {"counts_per_rev", "zero_count"};
 constexpr std::string_view kLimitKeys[] = {"extension_deg", "flexion_deg", "torque_Nm"};
+constexpr std::string_view kCableKeys[] = {"friction_Nm"};
 
 // The board's joint limit (SupervisorConfig::joint_min/max, ±1.6 rad), in degrees.
 constexpr double kBoardJointLimitDeg = 1.6 * 180.0 / std::numbers::pi;
@@ -109,6 +110,11 @@ RobotDescription Parse(std::string_view text, std::string_view source) {
            "must be inside its travel)");
   }
   d.torque_limit_Nm = Plausible(r, limits, "limits", "torque_Nm", 1e-3, 5.0, "N·m");
+  if (root.contains("cable")) {
+    const Json& cable = r.Section(root, "cable", kCableKeys);
+    d.cable_friction_Nm = Plausible(r, cable, "cable", "friction_Nm", 0.0,
+                                    kMaxCableFriction.ToDouble(), "N·m");
+  }
 
   // What follows from the parts must be a Maestro joint too (the ranges `mjc cal`
   // warns about, calibration_io.h): a ratio or stiffness outside them is a unit slip.
@@ -168,6 +174,9 @@ void UseRobotAlpha(const RobotDescription& robot, bool fit_alpha,
 void UseRobotJoint(const RobotDescription& robot, protocol::CalibrationRecord* record) {
   record->sea_stiffness = Stiffness::Quantize(robot.SeaStiffness());
   record->joint_zero_count = robot.joint_zero_count;
+  // On the record's mN·m grid, so what the board reads back is what was sent.
+  record->backlash.cable_friction = protocol::CableFrictionFromMilliNm(
+      static_cast<std::uint16_t>(std::lround(robot.cable_friction_Nm * 1000.0)));
 }
 
 double JointZeroShift(std::uint16_t held_zero, const RobotDescription& robot) {
@@ -178,15 +187,22 @@ double JointZeroShift(std::uint16_t held_zero, const RobotDescription& robot) {
 }
 
 std::string DescribeRobot(const RobotDescription& robot, std::string_view source) {
-  char text[256];
+  char text[320];
   std::snprintf(text, sizeof text,
                 " (%.*s): α = %.4f (r_m %.2f mm / r_j %.2f mm), K = %.4f N·m/rad "
-                "(2 × %.0f N/m × (%.2f mm)²)",
+                "(2 × %.0f N/m × (%.2f mm)²), ",
                 static_cast<int>(source.size()), source.data(), robot.Alpha(),
                 robot.motor_pulley_radius_m * 1e3, robot.joint_pulley_radius_m * 1e3,
                 robot.SeaStiffness(), robot.spring_rate_N_per_m,
                 robot.joint_pulley_radius_m * 1e3);
-  return robot.name + text;
+  std::string out = robot.name + text;
+  if (robot.cable_friction_Nm > 0) {
+    std::snprintf(text, sizeof text, "cable friction %.3f N·m", robot.cable_friction_Nm);
+    out += text;
+  } else {
+    out += "cable friction not modelled";
+  }
+  return out;
 }
 
 }  // namespace mjc::host

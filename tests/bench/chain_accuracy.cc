@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
         0x3FFF);
     const Angle joint = DecodeJointFrame(EncodeJointFrame(jcount, false), jc).angle;
 
-    const Angle cable_fixed = backlash.Update(motor);
+    const Angle cable_fixed = backlash.Update(motor, joint);
     const Torque torque = Mul<Torque>(k_sea, cable_fixed - joint);
     const AngularVelocity v = est.Update(joint);
     const Torque aligned = Torque::FromRaw(delay.Push(torque.raw()));

@@ -187,11 +187,13 @@ std::uint32_t StackUsed(const std::uint32_t* top_of_main) {
                                     reinterpret_cast<std::uintptr_t>(p));
 }
 
-// The benchmarks' tick: ±1° of slack, the position loop's gains, armed.
+// The benchmarks' tick: ±1° of slack, the shipped joint's cable friction, the position
+// loop's gains, armed.
 void ConfigureTick(ControlTick& tick) {
   ControlConfig config;
   config.backlash.c_right = Angle::FromDouble(0.0175);
   config.backlash.c_left = Angle::FromDouble(-0.0175);
+  config.backlash.cable_friction = Torque::FromDouble(0.3);
   config.position.kp = Fixed<PerRadian, 16>::FromDouble(8.0);
   config.position.ki = Fixed<PerRadianSecond, 16>::FromDouble(20.0);
   config.position.kd = Fixed<SecondPerRadian, 16>::FromDouble(0.05);

@@ -30,12 +30,15 @@ class Fnv1a {
 // The whole control tick over a sine trial and a fault: every telemetry field of every
 // tick and every window summary. The sensor words come from integer arithmetic only
 // (libm may differ between the host's and the target's C library; the core must not):
-// the motor follows the setpoint, the joint a sixth of it, plus a count of noise.
+// the motor follows the setpoint, the joint a sixth of it, plus a count of noise. The
+// cable's friction (0.1 N·m, 0.16 rad of the 0.63 N·m/rad spring) is below the spring
+// torque of the larger swings, so the cable side also slides (backlash.h).
 void HashControlTicks(Fnv1a& h, vt::Rng& rng, std::uint32_t ticks) {
   static ControlTick tick;
   ControlConfig config;
   config.backlash.c_right = Angle::FromDouble(0.0175);
   config.backlash.c_left = Angle::FromDouble(-0.0175);
+  config.backlash.cable_friction = Torque::FromDouble(0.1);
   tick.Configure(config);
   tick.Arm(true);
   SineConfig sine;

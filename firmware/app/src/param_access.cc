@@ -73,6 +73,9 @@ constexpr bool VisitParam(ParamId id, CanNodeConfig& node, ControlConfig& contro
     case ParamId::kCalibrationJointZero:
       visit(control.joint_encoder.zero_offset);
       return true;
+    case ParamId::kCalibrationFriction:
+      visit(control.backlash.cable_friction);
+      return true;
     case ParamId::kCalibrated:
       visit(calibrated);
       return true;

@@ -64,6 +64,7 @@ ControlConfigError ControlTick::Configure(const ControlConfig& config) {
   config_ = config;
   config_.position.tick_hz = config.tick_hz;
   motor_encoder_.Reconfigure();
+  backlash_.Configure(config_.sea_stiffness);
   inverse_.Configure();
   loop_.Configure();
   windows_ = WindowTracker(config_.tick_hz);
@@ -117,12 +118,15 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
     started_ = true;
   }
 
-  // 2. Cable side and SEA torque (eqs. 4, 5).
-  const Angle cable = backlash_.Update(motor);
-  const Torque torque = Mul<Torque>(config_.sea_stiffness, cable - supervised_.joint);
+  // 2. Cable side and SEA torque (eqs. 4, 5). The joint angle in a local: read through
+  // the member, it was loaded again after each store through the models' state
+  // pointers (which might alias it), 2 Cortex-M4 instructions a tick.
+  const Angle joint = supervised_.joint;
+  const Angle cable = backlash_.Update(motor, joint);
+  const Torque torque = Mul<Torque>(config_.sea_stiffness, cable - joint);
 
   // 3.–4. Aligned velocity, torque and segment; power and energy (eq. 3).
-  const AngularVelocity velocity = estimator_.Update(supervised_.joint);
+  const AngularVelocity velocity = estimator_.Update(joint);
   Delayed& delayed = delayed_[delayed_next_];
   const Torque aligned_torque = Torque::FromRaw(delayed.torque);
   delayed.torque = torque.raw();

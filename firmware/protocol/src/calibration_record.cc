@@ -1,5 +1,7 @@
 #include "mjc/protocol/calibration_record.h"
 
+#include <algorithm>
+
 #include "mjc/protocol/little_endian.h"
 
 namespace mjc::protocol {
@@ -13,6 +15,19 @@ constexpr std::uint16_t kPayloadLength = 36;
 
 }  // namespace
 
+Torque CableFrictionFromMilliNm(std::uint16_t milli_nm) {
+  // round(m·2^24/1000), in integers (m ≥ 0).
+  const std::int64_t scaled = std::int64_t{milli_nm} << Torque::kFracBits;
+  return Torque::FromRaw(static_cast<std::int32_t>((scaled + 500) / 1000));
+}
+
+std::uint16_t CableFrictionMilliNm(Torque friction) {
+  const std::int64_t raw = std::max<std::int64_t>(friction.raw(), 0);
+  const std::int64_t half = std::int64_t{1} << (Torque::kFracBits - 1);
+  const std::int64_t milli = (raw * 1000 + half) >> Torque::kFracBits;
+  return static_cast<std::uint16_t>(std::min<std::int64_t>(milli, 0xFFFF));
+}
+
 std::array<std::uint8_t, kCalibrationRecordSize> EncodeCalibration(
     const CalibrationRecord& r) {
   std::array<std::uint8_t, kCalibrationRecordSize> b{};
@@ -24,6 +39,7 @@ std::array<std::uint8_t, kCalibrationRecordSize> EncodeCalibration(
   PutLe(&b[16], static_cast<std::uint32_t>(r.backlash.alpha.raw()), 4);
   PutLe(&b[20], static_cast<std::uint32_t>(r.sea_stiffness.raw()), 4);
   PutLe(&b[24], r.joint_zero_count, 2);
+  PutLe(&b[26], CableFrictionMilliNm(r.backlash.cable_friction), 2);
   PutLe(&b[28], r.fit_rms_urad, 4);
   PutLe(&b[32], r.fit_lag_us, 4);
   PutLe(&b[36], r.fitted_at_unix_s, 8);
@@ -36,7 +52,9 @@ CalibrationResult DecodeCalibration(std::span<const std::uint8_t> b,
   *detail = 0;
   if (b.size() != kCalibrationRecordSize) return CalibrationResult::kWrongSize;
   if (GetLe(&b[0], 4) != kCalibrationMagic) return CalibrationResult::kBadMagic;
-  if (GetLe(&b[4], 2) != kCalibrationVersion || GetLe(&b[6], 2) != kPayloadLength) {
+  const std::uint64_t version = GetLe(&b[4], 2);
+  if ((version != kCalibrationVersion && version != kCalibrationVersionWithoutFriction) ||
+      GetLe(&b[6], 2) != kPayloadLength) {
     return CalibrationResult::kUnsupportedVersion;
   }
   if (GetLe(&b[44], 4) != Crc32(b.first(44))) return CalibrationResult::kBadCrc;
@@ -46,6 +64,10 @@ CalibrationResult DecodeCalibration(std::span<const std::uint8_t> b,
   r.backlash.alpha = Scale::FromRaw(GetI32(&b[16]));
   r.sea_stiffness = Stiffness::FromRaw(GetI32(&b[20]));
   r.joint_zero_count = static_cast<std::uint16_t>(GetLe(&b[24], 2));
+  if (version == kCalibrationVersion) {
+    r.backlash.cable_friction =
+        CableFrictionFromMilliNm(static_cast<std::uint16_t>(GetLe(&b[26], 2)));
+  }
   r.fit_rms_urad = static_cast<std::uint32_t>(GetLe(&b[28], 4));
   r.fit_lag_us = static_cast<std::uint32_t>(GetLe(&b[32], 4));
   r.fitted_at_unix_s = GetLe(&b[36], 8);

@@ -29,6 +29,7 @@ plant::PlantParams PlantForRobot(const host::RobotDescription& robot,
   p.sensors.motor_counts_per_rev = robot.motor_counts_per_rev;
   p.sensors.motor_count_at_zero = robot.motor_count_at_zero;
   p.sensors.joint_zero_count = robot.joint_zero_count;
+  if (robot.cable_friction_Nm > 0) p.cable.coulomb_Nm = robot.cable_friction_Nm;
   plant::ValidatePlantParams(p, std::string(source) + " on " + base.name);
   return p;
 }

@@ -505,7 +505,8 @@ TEST(ToFirmwareConfig, AcceptsAGoodFitAndMatchesTheDoubleModel) {
   model.Reset(Angle::Quantize(sweep.motor_rad[0]), Angle::Quantize(sweep.joint_rad[0]));
   double worst = 0.0;
   for (std::size_t n = 0; n < sweep.motor_rad.size(); ++n) {
-    const Angle out = model.Update(Angle::Quantize(sweep.motor_rad[n]));
+    const Angle out = model.Update(Angle::Quantize(sweep.motor_rad[n]),
+                                   Angle::Quantize(sweep.joint_rad[n]));
     worst = std::max(worst, std::abs(out.ToDouble() - reference[n]));
   }
   // Rounding of θ_m, c and the α·(θ_m − c) product: a few Q7.24 LSBs (6e-8 rad each).

@@ -53,6 +53,34 @@ TEST(RobotDescription, ReadsEveryFieldAndDerivesAlphaAndStiffness) {
   const std::string line = DescribeRobot(*robot, "test.json");
   EXPECT_NE(line.find("index-mcp (test.json): α = 1.2500"), std::string::npos) << line;
   EXPECT_NE(line.find("K = 1.1520 N·m/rad"), std::string::npos) << line;
+  // No "cable": the friction is not modelled.
+  EXPECT_EQ(robot->cable_friction_Nm, 0.0);
+  EXPECT_NE(line.find("cable friction not modelled"), std::string::npos) << line;
+}
+
+TEST(RobotDescription, ReadsTheCableFriction) {
+  nlohmann::json j = RobotJson();
+  j["cable"] = {{"friction_Nm", 0.2345}};
+  std::string why;
+  const auto robot = ParseRobotDescription(j.dump(), "test.json", &why);
+  ASSERT_TRUE(robot) << why;
+  EXPECT_EQ(robot->cable_friction_Nm, 0.2345);
+  const std::string line = DescribeRobot(*robot, "test.json");
+  EXPECT_NE(line.find("cable friction 0.234 N·m"), std::string::npos) << line;
+  // The record carries it on its mN·m grid: 0.2345 N·m → 235 mN·m (half away from 0).
+  protocol::CalibrationRecord record;
+  UseRobotJoint(*robot, &record);
+  EXPECT_EQ(protocol::CableFrictionMilliNm(record.backlash.cable_friction), 235);
+  EXPECT_EQ(record.backlash.cable_friction, protocol::CableFrictionFromMilliNm(235));
+  j["cable"] = {{"friction_Nm", 5.5}};
+  EXPECT_EQ(RobotRefusal(j),
+            "test.json: field 'cable.friction_Nm' = 5.5 is outside the plausible [0, 5] "
+            "N·m");
+  j["cable"] = {{"friction_Nm", -0.1}};
+  EXPECT_NE(RobotRefusal(j).find("'cable.friction_Nm' = -0.1 is outside"),
+            std::string::npos);
+  j["cable"] = {{"friction", 0.3}};
+  EXPECT_NE(RobotRefusal(j).find("friction_Nm"), std::string::npos);
 }
 
 TEST(RobotDescription, ShippedFilesLoad) {

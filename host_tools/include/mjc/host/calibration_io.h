@@ -30,7 +30,8 @@ nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& record);
 // The keys of a calibration file, as CalibrationToJson writes them.
 inline constexpr std::string_view kCalibrationKeys[] = {
     "c_right_deg",      "c_left_deg",   "alpha",      "sea_stiffness_Nm_per_rad",
-    "joint_zero_count", "fit_rms_urad", "fit_lag_us", "fitted_at_unix_s"};
+    "joint_zero_count", "fit_rms_urad", "fit_lag_us", "fitted_at_unix_s",
+    "cable_friction_Nm"};
 
 // Reads and range-checks a calibration (the board's own checks, run here first): nullopt
 // with the reason naming the field when it is missing, of the wrong type or out of
@@ -102,7 +103,8 @@ SweepSamples RecordSweep(BoardClient& board, double length_s,
 //   joint angles shifted from the zero of the board's `held` record to the
 //   description's (JointZeroShift);
 // - the record: `held` with the fitted backlash (ToFirmwareConfig), the fit's RMS and
-//   lag, and with a `robot` its SEA stiffness and joint zero (UseRobotJoint).
+//   lag (the cable friction `held` has), and with a `robot` its SEA stiffness, cable
+//   friction and joint zero (UseRobotJoint).
 //   fitted_at_unix_s is left as in `held`, for the caller to stamp.
 // `record` is empty when the fit is not usable, and `why` says why (the fit's own
 // refusal or the firmware's range).

@@ -45,6 +45,11 @@ struct RobotDescription {
   double extension_limit_deg = -45.0;
   double flexion_limit_deg = 90.0;
   double torque_limit_Nm = 1.0;
+  // "cable" (optional): the sheath's friction at the joint, N·m, [0, 5]: the SEA
+  // torque beyond which the spring pulls the cable through its slack. Measured on the
+  // joint (the plateau the SEA torque settles on after a reversal, the joint held), or
+  // 0 (absent): not modelled, the board's play operator holds the cable in its slack.
+  double cable_friction_Nm = 0.0;
 
   // α = r_m / r_j.
   double Alpha() const { return motor_pulley_radius_m / joint_pulley_radius_m; }
@@ -57,7 +62,7 @@ struct RobotDescription {
 // The keys of a description: top level, then each section's.
 inline constexpr std::string_view kRobotDescriptionKeys[] = {
     "name",          "description",   "pulleys", "springs",
-    "motor_encoder", "joint_encoder", "limits"};
+    "motor_encoder", "joint_encoder", "limits",  "cable"};
 
 // Reads a description from JSON text; `source` names it in messages. nullopt with the
 // reason in *why (naming the file and the field, with the plausible range) for
@@ -85,8 +90,8 @@ void UseRobotAlpha(const RobotDescription& robot, bool fit_alpha,
                    BacklashFitOptions* options);
 
 // The joint's own numbers in a calibration record: the SEA stiffness K (quantised to
-// the record's Q7.24) and the joint encoder's zero count. The backlash (c_r, c_l, α)
-// is the fit's and is not touched.
+// the record's Q7.24), the cable friction τ_f (to the record's mN·m) and the joint
+// encoder's zero count. The fit's c_r, c_l and α are not touched.
 void UseRobotJoint(const RobotDescription& robot, protocol::CalibrationRecord* record);
 
 // What to add to joint angles the board measured with its `held_zero` count so they

@@ -110,6 +110,9 @@ inline constexpr std::int64_t kI32Min = std::numeric_limits<std::int32_t>::min()
     kReadOnly, "joint encoder count at zero")                                            \
   X(kCalibrated, 0x0405, "calibrated", "", 0, 0, 1, kReadOnly,                           \
     "1 once a calibration was accepted")                                                 \
+  X(kCalibrationFriction, 0x0406, "calibration_cable_friction", "N.m",                   \
+    Torque::kFracBits, 0, kMaxCableFriction.raw(), kReadOnly,                            \
+    "sheath friction at the joint (0: not modelled)")                                    \
   X(kBuildId, 0x0500, "build_id", "", 0, param_detail::kI32Min, param_detail::kI32Max,   \
     kReadOnly, "the running image's commit (BoardInfo::build, as a signed value)")       \
   X(kProtocolVersion, 0x0501, "protocol_version", "", 0, 1, 0xFFFF, kReadOnly,           \
@@ -179,7 +182,7 @@ consteval std::uint32_t ParamListDigest() {
 // an existing parameter means (its id, key, unit, format or range), raise kVersion;
 // then write the new digest here (the compiler's message names it: "ParamListIs()
 // [with ... kDigest = N]").
-inline constexpr std::uint32_t kParamListDigest = 1630587717;
+inline constexpr std::uint32_t kParamListDigest = 1480729836;
 template <std::uint32_t kDigest>
 constexpr bool ParamListIs() {
   static_assert(kDigest == kParamListDigest,

@@ -16,6 +16,7 @@ namespace mjc::sim {
 //   sea.spring_rate_N_per_m      = k,  sea.joint_pulley_radius_m = r_j
 //   sensors.motor_counts_per_rev, motor_count_at_zero, joint_zero_count, and
 //   motor.gear_ratio             = the description's
+//   cable.coulomb_Nm             = its cable friction, when it gives one (> 0)
 // then checked as any parameter set (plant::ValidatePlantParams). The board reads its
 // motor encoder through `board`'s compiled-in MotorEncoderConfig (counts and gear
 // ratio): a description whose encoder differs from it would be a joint that board
