@@ -22,6 +22,11 @@ constexpr double kPlausibleOffsetDeg = 10;
 
 }  // namespace
 
+Torque CableFrictionForRecord(double friction_Nm) {
+  return protocol::CableFrictionFromMilliNm(
+      static_cast<std::uint16_t>(std::lround(friction_Nm * 1000.0)));
+}
+
 nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& r) {
   return {{"c_right_deg", RadToDeg(r.backlash.c_right.ToDouble())},
           {"c_left_deg", RadToDeg(r.backlash.c_left.ToDouble())},
@@ -100,8 +105,7 @@ std::optional<protocol::CalibrationRecord> CalibrationFromJson(
   r.backlash.c_left = Angle::Quantize(DegToRad(c_left));
   r.backlash.alpha = Scale::Quantize(alpha);
   r.sea_stiffness = Stiffness::Quantize(stiffness);
-  r.backlash.cable_friction = protocol::CableFrictionFromMilliNm(
-      static_cast<std::uint16_t>(std::lround(friction * 1000.0)));
+  r.backlash.cable_friction = CableFrictionForRecord(friction);
   // The board's checks, run here first, so a bad file never reaches the bus.
   const auto bytes = protocol::EncodeCalibration(r);
   protocol::CalibrationRecord checked;

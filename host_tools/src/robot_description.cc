@@ -174,9 +174,7 @@ void UseRobotAlpha(const RobotDescription& robot, bool fit_alpha,
 void UseRobotJoint(const RobotDescription& robot, protocol::CalibrationRecord* record) {
   record->sea_stiffness = Stiffness::Quantize(robot.SeaStiffness());
   record->joint_zero_count = robot.joint_zero_count;
-  // On the record's mN·m grid, so what the board reads back is what was sent.
-  record->backlash.cable_friction = protocol::CableFrictionFromMilliNm(
-      static_cast<std::uint16_t>(std::lround(robot.cable_friction_Nm * 1000.0)));
+  record->backlash.cable_friction = CableFrictionForRecord(robot.cable_friction_Nm);
 }
 
 double JointZeroShift(std::uint16_t held_zero, const RobotDescription& robot) {

@@ -15,11 +15,11 @@
 //   window_energy_err_pct_alpha125 that joint, the three subjects at 6–25°: worst
 //                                  analysed flexion, max(|ΔE_load|, |ΔE_unload|) / E_load
 //   eta_err_pt_alpha125            the same, worst |η_board − η_truth|
-//   *_alpha125_le15deg             the same two at 6–15° only: from 20° up the spring
-//                                  (1.152 N·m/rad) pulls the cable back through the
-//                                  slack harder than the cable's friction holds it,
-//                                  which the play operator does not model
-//                                  (robot_joint_test.cc), and the unloading drifts off
+//   *_alpha125_le15deg             the same two at 6–15° only, where the cable never
+//                                  slides: from 20° up the spring (1.152 N·m/rad) pulls
+//                                  it back through the slack harder than the sheath's
+//                                  friction holds it, which the board models with the
+//                                  description's τ_f (backlash.h, robot_joint_test.cc)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

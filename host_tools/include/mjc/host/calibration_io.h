@@ -25,6 +25,10 @@ namespace mjc::host {
 inline constexpr double kPlausibleAlpha[2] = {0.5, 2.0};
 inline constexpr double kPlausibleStiffness[2] = {0.063, 6.3};  // N·m/rad
 
+// A cable friction in N·m, [0, 5], on the record's mN·m grid (what a board then holds
+// and reads back), for a calibration file and a robot description alike.
+Torque CableFrictionForRecord(double friction_Nm);
+
 nlohmann::json CalibrationToJson(const protocol::CalibrationRecord& record);
 
 // The keys of a calibration file, as CalibrationToJson writes them.

@@ -46,9 +46,9 @@ struct RobotDescription {
   double flexion_limit_deg = 90.0;
   double torque_limit_Nm = 1.0;
   // "cable" (optional): the sheath's friction at the joint, N·m, [0, 5]: the SEA
-  // torque beyond which the spring pulls the cable through its slack. Measured on the
-  // joint (the plateau the SEA torque settles on after a reversal, the joint held), or
-  // 0 (absent): not modelled, the board's play operator holds the cable in its slack.
+  // torque beyond which the spring pulls the cable through its slack (robots/README.md
+  // says how to measure it). 0 (absent): not modelled, the board's play operator holds
+  // the cable in its slack.
   double cable_friction_Nm = 0.0;
 
   // α = r_m / r_j.
