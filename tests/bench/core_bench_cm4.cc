@@ -56,6 +56,9 @@ ControlTick g_shadow;
 TickResult g_result;
 Angle g_setpoint;
 constexpr int kMeasuredTicks = 101;
+// Ticks that fill the velocity window (ControlTick::kMaxVelocityWindow and more) before
+// anything is measured.
+constexpr int kFillTicks = 1100;
 Sample g_samples[kMeasuredTicks];
 
 Sample SensorWords(Angle setpoint) {
@@ -84,9 +87,10 @@ void ControlTick100() {
 // A whole trial, for the mean the tick costs (./bench: tick_instructions_cm4): the
 // board idle until the velocity window is full, then a 20 Hz sine of 5 repetitions with
 // 30 ms of rest before and after, every tick of it measured: 300 + 5 × 500 + 300 ticks,
-// and every one of its 10 windows completes inside them (the last 25 ms after its
-// cycle: the estimator's delay). At 20 Hz a window completes every 250 ticks, 40 times
-// as often as in the paper's 0.5 Hz trials, so the mean errs high. The trial's sensor
+// and 9 of its 10 windows complete inside them (each 50 ms after its end: the
+// estimator's delay; the last one's falls after the trailing rest). At 20 Hz a window
+// completes every 250 ticks, 40 times as often as in the paper's 0.5 Hz trials, so the
+// mean errs high. The trial's sensor
 // words are made before the markers from a trajectory started alike (the setpoint the
 // tick commands is the trajectory's: no backlash compensation, and no fault stops it).
 // A rehearsal on a second tick, before the markers, counts the windows and faults, so
@@ -96,7 +100,7 @@ constexpr std::uint16_t kTrialRepetitions = 5;
 constexpr std::uint32_t kTrialRestMs = 30;
 constexpr int kTrialTicks = 300 + kTrialRepetitions * 500 + 300;
 static_assert(kTrialTicks == 3100, "the entry's name, control_tick_trial_x3100, says");
-constexpr int kTrialWindows = 2 * kTrialRepetitions;
+constexpr int kTrialWindows = 2 * kTrialRepetitions - 1;
 ControlTick g_trial_tick;
 ControlTick g_rehearsal_tick;
 Sample g_trial_samples[kTrialTicks];
@@ -224,7 +228,7 @@ void SetUpCan() {
 void PrepareTrialTick(ControlTick& tick) {
   ConfigureTick(tick);
   TickResult r;
-  for (int i = 0; i < 600; ++i) tick.ISR_Step(SensorWords(Angle{}), &r);
+  for (int i = 0; i < kFillTicks; ++i) tick.ISR_Step(SensorWords(Angle{}), &r);
   if (tick.trajectory().StartSine(TrialSine()) != TrajectoryError::kOk) {
     qemu::SemihostExit(3);
   }
@@ -256,13 +260,13 @@ void SetUp() {
   SetUpTrial();
   SetUpTick(g_tick);
   SetUpTick(g_shadow);
-  for (int i = 0; i < 600; ++i) StepOnce();  // fill the velocity window
-  // The shadow replays the same 600 ticks, then records the next ones' sensor words.
+  for (int i = 0; i < kFillTicks; ++i) StepOnce();  // fill the velocity window
+  // The shadow replays the same ticks, then records the next ones' sensor words.
   TickResult r;
   Angle setpoint;
-  for (int i = 0; i < 600 + kMeasuredTicks; ++i) {
+  for (int i = 0; i < kFillTicks + kMeasuredTicks; ++i) {
     const Sample s = SensorWords(setpoint);
-    if (i >= 600) g_samples[i - 600] = s;
+    if (i >= kFillTicks) g_samples[i - kFillTicks] = s;
     g_shadow.ISR_Step(s, &r);
     setpoint = r.telemetry.setpoint;
   }

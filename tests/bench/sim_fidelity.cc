@@ -4,6 +4,7 @@
 //
 //   power_rmse_pct_peak      worst trial, board power vs truth (aligned), % of peak
 //   power_rmse_pct_peak_25deg  the same at 25° (the amplitude the paper tunes to)
+//   power_latency_ms         how old the instant is that power refers to
 //   window_energy_err_pct    worst analysed flexion: max(|ΔE_load|, |ΔE_unload|) / E_load
 //   eta_err_pt               worst |η_board − η_truth| over the analysed flexions
 //   eta_lossless_pt          worst |η_board| with a purely elastic interface
@@ -83,6 +84,9 @@ int main() {
   const double cpu = static_cast<double>(std::clock() - start_cpu) / CLOCKS_PER_SEC;
   std::printf("power_rmse_pct_peak: %.2f %%\n", power);
   std::printf("power_rmse_pct_peak_25deg: %.2f %%\n", power25);
+  const ControlTick& tick = board.app().control();
+  std::printf("power_latency_ms: %.1f ms (the velocity window's delay, %u ticks)\n",
+              1000.0 * tick.delay_ticks() / tick.config().tick_hz, tick.delay_ticks());
   std::printf("window_energy_err_pct: %.2f %%\n", energy);
   std::printf("eta_err_pt: %.2f points\n", eta);
   std::printf("eta_lossless_pt: %.2f points\n", eta_lossless);

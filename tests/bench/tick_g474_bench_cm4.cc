@@ -110,9 +110,9 @@ int main() {
   if (g_board.app().StartTrial(sine).result != app::CommandOutcomeCode::kAccepted) {
     qemu::SemihostExit(4);
   }
-  // 600 ticks in: the joint moving, the velocity window (501 ticks) full. (QEMU traces
-  // every instruction of the image, so the lead-in is kept short.)
-  for (int i = 0; i < 600; ++i) Step();
+  // 1,100 ticks in: the joint moving, the velocity window (1,001 ticks) full. (QEMU
+  // traces every instruction of the image, so the lead-in is kept short.)
+  for (int i = 0; i < 1100; ++i) Step();
 
   Announce("baseline");
   mjc_bench_begin();

@@ -2,8 +2,10 @@
 // 0.5 Hz) against plant ground truth, noise on: the board's window energies within 2 %
 // of the loading energy, η within 1 point, and the attachment it identifies within 10 %
 // of the plant's (TrueInterface at that frequency) — the bounds the 0.5 Hz tests hold.
-// The board's velocity window (501 ticks, 50 ms) and its power estimate's latency are
-// the firmware's own whatever the drive, so at 2 Hz they span a tenth of a cycle.
+// The board's velocity window (1,001 ticks, 100 ms) and its power estimate's latency
+// (50 ms) are the firmware's own whatever the drive, so at 2 Hz the window spans a
+// fifth of a cycle: the attachment model (attachment_model.h) carries the joint's
+// kinks the window would smear.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -38,7 +38,6 @@ constexpr std::uint32_t kRestTicks = 2000;  // kRest100ms at 10 kHz
 // flexion peak, so the crossing is a physical one mid-motion.
 constexpr double kJointMaxRad = 0.03;
 constexpr double kMotorMaxRad = 0.3;
-constexpr double kVelocityMaxRadS = 0.1;
 // The torque limit's cause is the subject resisting the flexion: the strap preload
 // ramps from subject1's 0.012 N·m to 1 N·m (the model's largest) over 100 ms from the
 // start of the flexion. With the limit at 0.15 N·m the load keeps the spring beyond it
@@ -93,6 +92,23 @@ class SampleReference {
   explicit SampleReference(const ControlConfig& config) : config_(config) {}
 
   void set_config(const ControlConfig& config) { config_ = config; }
+  // The attachment (k, b) the board's velocity model follows from this tick on
+  // (ControlTick::attachment()); a change bends the model's path without a step in its
+  // velocity, as attachment_model.h describes.
+  void set_attachment(double k, double b) {
+    const double sea = config_.sea_stiffness.ToDouble();
+    const double beta = sea / (sea + k);
+    const double gain = (sea + k) / (sea + k + b * config_.tick_hz);
+    if (seeded_ && (k != k_ || b != b_)) {
+      const double target = beta_ * model_cable_ + offset_;
+      const double moved = model_ + gain_ / gain * (target - model_);
+      offset_ = std::clamp(moved - beta * model_cable_, -2.0, 2.0);
+    }
+    k_ = k;
+    b_ = b;
+    beta_ = beta;
+    gain_ = gain;
+  }
   // The firmware restarts its signal chain when a config or calibration is applied;
   // the reference starts again on the same tick's sample.
   void Restart() { seeded_ = false; }
@@ -130,11 +146,26 @@ class SampleReference {
     cable_ = std::clamp(seeded_ ? cable_ : joint_, lower, upper);
     torque_ = config_.sea_stiffness.ToDouble() * (cable_ - joint_);
 
-    // The least-squares slope over the last N good joint angles (the estimator's
-    // definition), a window that starts full of the first angle.
+    // The attachment model (attachment_model.h: b·θ̇ = K(θ̃ − θ) − k·θ + c by backward
+    // Euler, the cable side clamped to ±4 rad), starting at rest at θ_j.
+    model_cable_ = std::clamp(cable_, -4.0, 4.0);
+    if (!seeded_) {
+      model_ = std::clamp(joint_, -4.0, 4.0);
+      offset_ = std::clamp(model_ - beta_ * model_cable_, -2.0, 2.0);
+      model_ = beta_ * model_cable_ + offset_;
+    }
+    const double before = model_;
+    model_ += gain_ * (beta_ * model_cable_ + offset_ - model_);
+    // The least-squares slope over the last N good joint angles less the model at the
+    // middle of its step, plus the model's step at the window's centre (the
+    // estimator's definition), a window that starts full of zero residuals.
     const std::size_t n = config_.velocity_window;
-    if (!seeded_) window_.assign(n, joint_);
-    window_[next_] = joint_;
+    if (!seeded_) {
+      window_.assign(n, 0.0);
+      steps_.assign(n, 0.0);
+    }
+    window_[next_] = joint_ - (model_ + before) / 2.0;
+    steps_[next_] = model_ - before;
     next_ = (next_ + 1) % n;
     const double centre = static_cast<double>(n - 1) / 2.0;
     double sum = 0;
@@ -143,7 +174,8 @@ class SampleReference {
     }
     const double nd = static_cast<double>(n);
     const double d = nd * (nd * nd - 1.0) / 12.0;
-    velocity_ = sum / d * config_.tick_hz;
+    const double centre_step = steps_[(next_ + (n - 1) / 2) % n];
+    velocity_ = (sum / d + centre_step) * config_.tick_hz;
 
     // The supervisor's history rules (supervisor.cc), on these numbers: history
     // starts with the first sample after a restart.
@@ -193,8 +225,10 @@ class SampleReference {
   std::uint16_t joint_count_ = 0, last_joint_count_ = 0, last_raw_motor_ = 0;
   std::int64_t motor_count_ = 0, last_motor_count_ = 0;
   double joint_ = 0, motor_ = 0, cable_ = 0, torque_ = 0, motor_at_joint_change_ = 0;
-  std::vector<double> window_;
+  std::vector<double> window_, steps_;
   std::size_t next_ = 0;
+  double k_ = -1, b_ = -1, beta_ = 0, gain_ = 0, offset_ = 0, model_ = 0,
+         model_cable_ = 0;
   double velocity_ = 0;
   std::uint32_t motor_frozen_ticks_ = 0;
   bool joint_jump_ = false, joint_stuck_ = false, motor_stuck_ = false;
@@ -354,6 +388,9 @@ class Rig {
     if (board_.app().last().telemetry.tick != next_tick_) Fail("tick count mismatch");
     if (restart_pending_) reference_.Restart();
     restart_pending_ = false;
+    const AttachmentParams& attachment = board_.app().control().attachment();
+    reference_.set_attachment(attachment.stiffness.ToDouble(),
+                              attachment.damping.ToDouble());
     reference_.Update(board_.io().last_sample(), applied_duty_, applied_error_);
     applied_duty_ = board_.io().duty();
     applied_error_ =
@@ -721,16 +758,19 @@ Measurement Measure(FaultCase c) {
       m.cause_tick = tick;
       bridge_at_cause = on_before;
     }
-    const bool rule = c == FaultCase::kJointStuck   ? r.joint_stuck()
-                      : c == FaultCase::kMotorStuck ? r.motor_stuck()
-                      : c == FaultCase::kVelocityLimit
-                          ? std::fabs(r.velocity()) > kVelocityMaxRadS
-                      : IsLimit(c) ? have_cause
-                                   : false;
+    const bool rule =
+        c == FaultCase::kJointStuck   ? r.joint_stuck()
+        : c == FaultCase::kMotorStuck ? r.motor_stuck()
+        : c == FaultCase::kVelocityLimit
+            ? std::fabs(r.velocity()) > kVelocityMaxRadS - kVelocityReferenceTolRadS
+        : IsLimit(c) ? have_cause
+                     : false;
     if (!have_detectable && rule) {
       have_detectable = true;
       m.detectable_tick = tick;
     }
+    m.velocity_before_stop = m.velocity_at_stop;
+    m.velocity_at_stop = std::fabs(r.velocity());
     if (!rig.bridge()) {
       m.stop_tick = tick;
       m.raised = rig.board().app().last().raised;

@@ -39,10 +39,12 @@
 //                                    K·(θ̃ − θ_j)). Velocity: from the first sample
 //                                    instant whose plant-truth joint velocity exceeds
 //                                    the limit. The board judges the aligned estimate,
-//                                    the least-squares slope centred delay_ticks() back,
-//                                    so this stop is not 0 ticks; `detectable_tick` is
-//                                    where that slope, recomputed on the raw samples,
-//                                    first exceeds the limit
+//                                    centred delay_ticks() back, so this stop is not 0
+//                                    ticks; `detectable_tick` is where that estimate,
+//                                    recomputed in double on the raw samples (the
+//                                    slope of θ_j less the attachment model, plus the
+//                                    model's velocity), first comes within
+//                                    kVelocityReferenceTolRadS of the limit
 //   tick_overrun                     SimJointIo::InjectOverrun before every tick until
 //                                    the cause is removed (a tick that keeps running
 //                                    late); from the first late sample
@@ -119,6 +121,13 @@ const char* Name(FaultCase c);
 // The supervisor's code the case must latch.
 Fault ExpectedFault(FaultCase c);
 
+// How far the board's velocity estimate may lie from the double-precision reference's:
+// the attachment model's per-tick step is rounded to ModelAngle (±0.5 LSB, 3.7e-5 rad/s
+// at 10 kHz, attachment_model.h), and the estimate to AngularVelocity. The velocity
+// rule's detectable tick is where the reference first comes within this of the limit.
+inline constexpr double kVelocityReferenceTolRadS = 5e-5;
+inline constexpr double kVelocityMaxRadS = 0.1;
+
 struct Measurement {
   FaultCase which = FaultCase::kJointParity;
   // Empty when the scenario ran as planned (motion started, the bridge went off, the
@@ -131,6 +140,9 @@ struct Measurement {
   std::uint32_t stop_tick = 0;        // first tick whose written actuation is disabled
   Fault raised = Fault::kNone;        // what the board latched in the stop tick
   std::uint16_t delay_ticks = 0;      // the velocity estimator's delay
+  // The reference's |velocity| on the tick before the stop and on the stop's tick.
+  double velocity_before_stop = 0;
+  double velocity_at_stop = 0;
   std::uint16_t host_timeout_ms = 0;
   std::uint16_t stream_timeout_ms = 0;
 

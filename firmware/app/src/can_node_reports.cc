@@ -27,13 +27,7 @@ void CanNode::SendEvent(const AppEvent& e) {
     case AppEvent::Kind::kWindow: {
       const WindowSummary& w = e.window;
       // The attachment's fit, solved here in the main loop from the tick's sums.
-      InterfaceFitSums sums;
-      InterfaceFit fit;
-      if (app_->PopWindowFit(w.start_tick, &sums)) {
-        fit = SolveInterfaceFit(sums);
-      } else {
-        fit.status = InterfaceFitStatus::kNotDelivered;
-      }
+      const InterfaceFit fit = app_->SolveWindowFit(w.start_tick);
       protocol::WindowHeader h;
       h.motion = w.motion;
       h.repetition = w.repetition;

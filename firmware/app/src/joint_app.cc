@@ -1,5 +1,7 @@
 #include "mjc/app/joint_app.h"
 
+#include <algorithm>
+
 namespace mjc::app {
 namespace {
 
@@ -97,6 +99,12 @@ CommandOutcome JointApp::ClearFaults(RequestTag tag) {
 }
 
 void JointApp::ISR_FollowHost() {
+  // A new fit of the attachment for the velocity estimator's model (SolveWindowFit).
+  // Read in place: an empty queue costs two loads.
+  if (const AttachmentParams* fit = attachments_.Front()) {
+    (void)control_.SetAttachment(*fit);  // valid: SolveWindowFit checked it
+    attachments_.DropFront();
+  }
   // A plain load on the usual tick; the exclusive-access exchange only when a fault
   // is pending (a raise between the two is then taken with it, never lost).
   if (raised_fault_.load(std::memory_order_relaxed) != 0) {
@@ -120,15 +128,34 @@ void JointApp::ISR_Done(RequestTag tag, CommandOutcome outcome) {
   events_.Push(e);
 }
 
-bool JointApp::PopWindowFit(std::uint32_t start_tick, InterfaceFitSums* out) {
+bool JointApp::PopWindowFit(std::uint32_t start_tick, InterfaceFitSums* out,
+                            bool* of_trial) {
   WindowFitSums w;
   while (window_fits_.Pop(&w)) {
     if (w.start_tick == start_tick) {
       *out = w.sums;
+      if (of_trial != nullptr) *of_trial = w.trial;
       return true;
     }
   }
   return false;
+}
+
+InterfaceFit JointApp::SolveWindowFit(std::uint32_t start_tick) {
+  InterfaceFitSums sums;
+  InterfaceFit fit;
+  bool trial = false;
+  if (!PopWindowFit(start_tick, &sums, &trial)) {
+    fit.status = InterfaceFitStatus::kNotDelivered;
+    return fit;
+  }
+  fit = SolveInterfaceFit(sums);
+  // A fit of a lossless or a stiff attachment can come out a little below zero (the
+  // window's noise): the model takes it as zero.
+  const AttachmentParams params{std::max(fit.stiffness, Stiffness{}),
+                                std::max(fit.damping, Damping{})};
+  if (trial && fit.valid()) attachments_.Push(params);
+  return fit;
 }
 
 JointApp::Snapshot JointApp::Latest() const {
@@ -195,6 +222,7 @@ CommandOutcome JointApp::ISR_Apply(const Request& c) {
                                           : control_.trajectory().StartSweep(c.sweep);
       if (error != TrajectoryError::kOk) return Invalid(error);
       ISR_Enter(trial ? BoardState::kRunning : BoardState::kCalibrating);
+      windows_of_trial_ = trial;
       return {};
     }
     case RequestKind::kStartStream: {
@@ -241,7 +269,7 @@ void JointApp::ISR_AfterStep() {
     ISR_Enter(BoardState::kFault);
   }
   if (result_.window_completed) {
-    window_fits_.Push({result_.window.start_tick, result_.window_fit});
+    window_fits_.Push({result_.window.start_tick, windows_of_trial_, result_.window_fit});
     AppEvent e;
     e.kind = AppEvent::Kind::kWindow;
     e.tick = result_.telemetry.tick;

@@ -55,6 +55,12 @@ constexpr bool VisitParam(ParamId id, CanNodeConfig& node, ControlConfig& contro
     case ParamId::kVelocityWindow:
       visit(control.velocity_window);
       return true;
+    case ParamId::kAttachmentPriorStiffness:
+      visit(control.attachment_prior.stiffness);
+      return true;
+    case ParamId::kAttachmentPriorDamping:
+      visit(control.attachment_prior.damping);
+      return true;
     case ParamId::kTorqueMax:
       visit(control.supervisor.torque_max);
       return true;

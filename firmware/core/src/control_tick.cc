@@ -8,10 +8,10 @@ ControlTick::ControlTick()
     : motor_encoder_(&config_.motor_encoder, &motor_state_),
       backlash_(&config_.backlash, &backlash_state_),
       inverse_(&config_.backlash, &inverse_state_),
-      estimator_(window_storage_),
       windows_(config_.tick_hz),
       loop_(&config_.position, &loop_state_),
-      supervisor_(&config_.supervisor, &supervisor_state_) {
+      supervisor_(&config_.supervisor, &supervisor_state_),
+      estimator_(window_storage_) {
   Configure(config_);
 }
 
@@ -41,6 +41,9 @@ ControlConfigError ControlTick::Validate(const ControlConfig& config) {
   if (mjc::Validate(config.supervisor) != SupervisorConfigError::kOk) {
     return ControlConfigError::kSupervisor;
   }
+  if (!AttachmentParamsValid(config.attachment_prior)) {
+    return ControlConfigError::kAttachmentPrior;
+  }
   return ControlConfigError::kOk;
 }
 
@@ -60,11 +63,18 @@ ControlConfigError ControlTick::Configure(const ControlConfig& config) {
   const ControlConfigError error = Validate(config);
   if (error != ControlConfigError::kOk) return error;
   estimator_.Configure({.window = config.velocity_window, .tick_hz = config.tick_hz});
+  const bool new_prior =
+      !configured_ ||
+      config.attachment_prior.stiffness != config_.attachment_prior.stiffness ||
+      config.attachment_prior.damping != config_.attachment_prior.damping;
+  if (new_prior) attachment_ = config.attachment_prior;
+  configured_ = true;
 
   config_ = config;
   config_.position.tick_hz = config.tick_hz;
   motor_encoder_.Reconfigure();
   backlash_.Configure(config_.sea_stiffness);
+  model_.Configure(config_.sea_stiffness, attachment_, config_.tick_hz);
   inverse_.Configure();
   loop_.Configure();
   windows_ = WindowTracker(config_.tick_hz);
@@ -83,6 +93,12 @@ void ControlTick::Restart() {
   energy_.Clear();
   supervised_.applied_duty = Duty{};
   supervised_.motor_error = Angle{};
+}
+
+bool ControlTick::SetAttachment(const AttachmentParams& params) {
+  if (!model_.Configure(config_.sea_stiffness, params, config_.tick_hz)) return false;
+  attachment_ = params;
+  return true;
 }
 
 void ControlTick::Arm(bool armed) {
@@ -109,10 +125,16 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   }
   if (!started_) {
     backlash_.Reset(motor, supervised_.joint);
-    estimator_.Reset(supervised_.joint);
+    // The play operator gives the same θ̃_j again for the same inputs (step 2).
+    model_.Reset(supervised_.joint, backlash_.Update(motor, supervised_.joint));
+    estimator_.Reset(Angle{});  // θ_j − θ_model: the model starts at θ_j
     // Every slot of the ring in use (the estimator's delay, >= 16 ticks: Validate).
     for (std::size_t i = 0; i < estimator_.delay_ticks(); ++i) {
-      delayed_[i] = {.torque = 0, .segment = Segment::kIdle, .repetition = 0};
+      delayed_[i] = {.torque = 0,
+                     .joint = supervised_.joint.raw(),
+                     .model_step = 0,
+                     .segment = Segment::kIdle,
+                     .repetition = 0};
     }
     delayed_next_ = 0;
     started_ = true;
@@ -125,11 +147,25 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   const Angle cable = backlash_.Update(motor, joint);
   const Torque torque = Mul<Torque>(config_.sea_stiffness, cable - joint);
 
-  // 3.–4. Aligned velocity, torque and segment; power and energy (eq. 3).
-  const AngularVelocity velocity = estimator_.Update(joint);
+  // 3.–4. Aligned velocity, torque, angle and segment; power and energy (eq. 3). The
+  // slope is of θ_j less the model at the middle of its step (the mean of its states
+  // before and after), and the step at the centre is added back: the model's velocity
+  // at that same half tick (attachment_model.h).
+  const std::int32_t model_step = model_.ISR_Step(cable);
+  // θ_before + θ_after in ModelAngle raw, halved into Angle raw: two states within
+  // ±6 rad add up within ModelAngle's ±16 rad (attachment_model.h).
+  constexpr int kMidShift = ModelAngle::kFracBits - Angle::kFracBits + 1;
+  const std::int32_t model_mid =
+      (2 * model_.angle().raw() - model_step + (1 << (kMidShift - 1))) >> kMidShift;
   Delayed& delayed = delayed_[delayed_next_];
+  // |θ_j| ≤ π and |θ_model| ≤ 6 rad: the residual fits Angle without a saturation test.
+  const AngularVelocity velocity =
+      estimator_.Update(Angle::FromRaw(joint.raw() - model_mid), delayed.model_step);
   const Torque aligned_torque = Torque::FromRaw(delayed.torque);
+  const Angle aligned_joint = Angle::FromRaw(delayed.joint);
   delayed.torque = torque.raw();
+  delayed.joint = joint.raw();
+  delayed.model_step = model_step;
   const Power power = Mul<Power>(aligned_torque, velocity);
   energy_.Add(power);
 
@@ -168,9 +204,9 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   delayed.repetition = point.repetition;
   delayed_next_ = delayed_next_ + 1 == estimator_.delay_ticks() ? 0 : delayed_next_ + 1;
   const std::uint32_t aligned_tick = tick_ - estimator_.delay_ticks();
-  r.window_completed = windows_.Update(aligned_tick, aligned_segment, aligned_repetition,
-                                       power, aligned_torque, estimator_.centre(),
-                                       velocity, &r.window, &r.window_fit);
+  r.window_completed =
+      windows_.Update(aligned_tick, aligned_segment, aligned_repetition, power,
+                      aligned_torque, aligned_joint, velocity, &r.window, &r.window_fit);
 
   const Angle setpoint =
       config_.backlash_compensation ? inverse_.Command(point.position) : point.position;

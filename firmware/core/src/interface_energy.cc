@@ -45,6 +45,8 @@ void WindowTracker::Begin(std::uint32_t tick, Motion motion, std::uint16_t repet
   loading_ = unloading_ = positive_ = negative_ = 0;
   peak_power_ = Power{};
   peak_torque_ = Torque{};
+  peak_power_magnitude_ = 0;
+  peak_torque_magnitude_ = 0;
   fit_sums_.Clear();
 }
 
@@ -62,49 +64,6 @@ void WindowTracker::Finish(std::uint32_t tick, WindowSummary* done) const {
   done->eta_percent = EtaPercent(loading_, unloading_, &done->eta_valid);
   done->peak_power = peak_power_;
   done->peak_torque = peak_torque_;
-}
-
-bool WindowTracker::Update(std::uint32_t tick, Segment segment, std::uint16_t repetition,
-                           Power power, Torque torque, Angle joint,
-                           AngularVelocity velocity, WindowSummary* done,
-                           InterfaceFitSums* done_fit) {
-  const bool flexion_loading = segment == Segment::kFlexionLoading;
-  const bool extension_loading = segment == Segment::kExtensionLoading;
-  const bool unloading =
-      segment == Segment::kFlexionUnloading || segment == Segment::kExtensionUnloading;
-  const Motion motion = (flexion_loading || segment == Segment::kFlexionUnloading)
-                            ? Motion::kFlexion
-                            : Motion::kExtension;
-  bool completed = false;
-
-  // Leaving the current window?
-  if (phase_ == Phase::kUnloading && !(unloading && motion == motion_)) {
-    Finish(tick, done);
-    *done_fit = fit_sums_;
-    completed = true;
-    phase_ = Phase::kNone;
-  } else if (phase_ == Phase::kLoading && !(flexion_loading || extension_loading) &&
-             !(unloading && motion == motion_)) {
-    ++dropped_;  // loading interrupted before the peak
-    phase_ = Phase::kNone;
-  }
-
-  if (phase_ == Phase::kNone && (flexion_loading || extension_loading)) {
-    Begin(tick, motion, repetition);
-  } else if (phase_ == Phase::kLoading && unloading && motion == motion_) {
-    phase_ = Phase::kUnloading;
-    peak_tick_ = tick;
-  }
-  // Unloading seen without its loading half (started mid-window) opens no window.
-
-  if (phase_ != Phase::kNone) {
-    (phase_ == Phase::kLoading ? loading_ : unloading_) += power.raw();
-    (power.raw() > 0 ? positive_ : negative_) += power.raw();
-    if (Abs(power) > Abs(peak_power_)) peak_power_ = power;
-    if (Abs(torque) > Abs(peak_torque_)) peak_torque_ = torque;
-    fit_sums_.Add(joint, velocity, torque);
-  }
-  return completed;
 }
 
 }  // namespace mjc

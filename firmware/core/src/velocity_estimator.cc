@@ -9,14 +9,15 @@ struct SlopeScale {
   int shift = 0;
 };
 
-// Velocity in Q20 from a slope in raw Q24 angle per tick:
-//   ω_raw = (S1 − c·S0) · f / (D · 2^4).
+// Velocity in Q20 from a slope in ModelAngle (Q27) raw per tick, 2^3·(S1 − c·S0)/D from
+// the Q24 samples plus the model's step:
+//   ω_raw = (2^3·(S1 − c·S0) + D·step) · f / (D · 2^7).
 // The largest shift whose multiplier still fits in 30 bits (precision ≥ 2^-29); a zero
 // multiplier means the window is too short for this tick rate.
 SlopeScale ScaleFor(const VelocityEstimatorConfig& config) {
   const auto n = static_cast<std::int64_t>(config.window);
   const std::int64_t d = n * (n * n - 1) / 12;
-  const std::int64_t denominator = 16 * d;
+  const std::int64_t denominator = 128 * d;
   SlopeScale best;
   for (int s = 32; s <= 62; ++s) {
     const std::int64_t f = config.tick_hz;
@@ -34,7 +35,9 @@ VelocityEstimatorError VelocityEstimator::Check(const VelocityEstimatorConfig& c
                                                 std::size_t capacity) {
   if (config.window % 2 == 0) return VelocityEstimatorError::kWindowEven;
   if (config.window < kMinWindow) return VelocityEstimatorError::kWindowTooShort;
-  if (config.window > capacity) return VelocityEstimatorError::kWindowTooLong;
+  if (config.window > capacity || config.window > kMaxWindow) {
+    return VelocityEstimatorError::kWindowTooLong;
+  }
   if (config.tick_hz < 100 || config.tick_hz > 100000) {
     return VelocityEstimatorError::kTickRateOutOfRange;
   }
@@ -48,6 +51,8 @@ VelocityEstimatorError VelocityEstimator::Configure(
   if (error != VelocityEstimatorError::kOk) return error;
   const SlopeScale scale = ScaleFor(config);
   window_ = config.window;
+  const std::int64_t n = config.window;
+  d_ = static_cast<std::int32_t>(n * (n * n - 1) / 12);  // < 2^30 for n ≤ kMaxWindow
   multiplier_ = static_cast<std::int32_t>(scale.multiplier);
   shift_ = scale.shift;
   Reset(Angle{});
@@ -62,7 +67,7 @@ void VelocityEstimator::Reset(Angle angle) {
   centred_ = 0;  // Σ (i − c)·x = 0 for a constant x
 }
 
-AngularVelocity VelocityEstimator::Update(Angle angle) {
+AngularVelocity VelocityEstimator::Update(Angle angle, std::int32_t centre_step) {
   if (window_ == 0) return AngularVelocity{};
   const std::int32_t x_new = angle.raw();
   const std::int32_t x_old = storage_[oldest_];
@@ -75,9 +80,11 @@ AngularVelocity VelocityEstimator::Update(Angle angle) {
   const std::int32_t c = window_ / 2;
   centred_ = centred_ - s0_ + std::int64_t{c + 1} * x_old + std::int64_t{c} * x_new;
   s0_ = s0_ - x_old + x_new;
-  // multiplier_ is positive and below 2^30 (ScaleFor).
+  // For N ≤ kMaxWindow, |2^3·T| ≤ 2^3·(N²/4)·2^31 < 2^54 and |D·step| < 2^30·2^31, so
+  // the sum fits int64; multiplier_ is positive and below 2^30 (ScaleFor).
+  const std::int64_t slope = centred_ * 8 + std::int64_t{d_} * centre_step;
   const std::int64_t v =
-      MulShiftRoundUnsigned(centred_, static_cast<std::uint32_t>(multiplier_), shift_);
+      MulShiftRoundUnsigned(slope, static_cast<std::uint32_t>(multiplier_), shift_);
   return AngularVelocity::FromRaw(fixed_detail::SaturateTo<std::int32_t>(v));
 }
 

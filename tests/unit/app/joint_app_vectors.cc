@@ -1,7 +1,9 @@
 // The application state machine against a scripted I/O (no plant): transitions,
 // refusals, the same-tick fault stop, and the event stream. Runs on the host and on
 // the Cortex-M4.
+#include <cmath>
 #include <cstdint>
+#include <numbers>
 
 #include "mjc/app/joint_app.h"
 #include "vector_test.h"
@@ -140,6 +142,71 @@ MJC_VECTOR_TEST(JointApp, EachWindowsFitSumsFollowItsEvent) {
   InterfaceFitSums none;
   VT_EXPECT_TRUE(!app.PopWindowFit(12345, &none));
   VT_EXPECT_EQ(app.dropped_window_fits(), 0u);
+}
+
+// The joint swinging ±0.2 rad at 2 Hz (2.5 rad/s at most, inside the velocity limit)
+// against a motor at rest: the fit of each window (2,500 ticks of a 2 Hz motion) comes
+// out valid (τ = K(θ̃ − θ_j) against a moving θ_j).
+struct SwingingIo {
+  int tick = 0;
+  Sample ISR_Read() {
+    const double angle = 0.2 * std::sin(2 * std::numbers::pi * 2.0 * tick++ / 10000.0);
+    const long count = std::lround(angle * kJointCountsPerRev / (2 * std::numbers::pi));
+    Sample s;
+    s.joint_frame = EncodeJointFrame(static_cast<std::uint16_t>(count & 0x3FFF), false);
+    return s;
+  }
+  void ISR_Write(const Actuation&) {}
+};
+static_assert(hal::JointIo<SwingingIo>);
+
+// Runs `ticks` ticks, solving each window's fit in the main loop as the CAN node does;
+// the number of valid fits.
+int RunSolvingFits(JointApp& app, SwingingIo& io, int ticks) {
+  int valid = 0;
+  for (int i = 0; i < ticks; ++i) {
+    app.ISR_Tick(io);
+    AppEvent e;
+    while (app.PopEvent(&e)) {
+      if (e.kind == AppEvent::Kind::kWindow &&
+          app.SolveWindowFit(e.window.start_tick).valid()) {
+        ++valid;
+      }
+    }
+  }
+  return valid;
+}
+
+MJC_VECTOR_TEST(JointApp, ATrialsFitsReplaceTheAttachmentPriorASweepsDoNot) {
+  // A calibration sweep moves the robot without the hand: its fits describe no
+  // attachment and leave the velocity model's prior. A trial's valid fit replaces it
+  // from the next tick, clamped to k, b ≥ 0.
+  MJC_FRESH_APP(app);
+  SwingingIo io;
+  app.SetCalibration(TestCalibration());
+  app.ISR_Tick(io);
+  const AttachmentParams prior = ControlConfig{}.attachment_prior;
+  RampedSineConfig sweep;
+  sweep.end_amplitude = Angle::FromDouble(0.1);
+  sweep.frequency = Frequency::FromDouble(2.0);
+  sweep.repetitions = 1;
+  VT_EXPECT_TRUE(app.StartCalibrationSweep(sweep).result ==
+                 CommandOutcomeCode::kAccepted);
+  VT_EXPECT_TRUE(RunSolvingFits(app, io, 6000) > 0);
+  VT_EXPECT_TRUE(app.state() == BoardState::kIdle);
+  VT_EXPECT_TRUE(app.control().attachment().stiffness == prior.stiffness);
+  VT_EXPECT_TRUE(app.control().attachment().damping == prior.damping);
+
+  SineConfig trial;
+  trial.amplitude = Angle::FromDouble(0.1);
+  trial.frequency = Frequency::FromDouble(2.0);
+  trial.repetitions = 1;
+  VT_EXPECT_TRUE(app.StartTrial(trial).result == CommandOutcomeCode::kAccepted);
+  VT_EXPECT_TRUE(RunSolvingFits(app, io, 6000) > 0);
+  // The last fit: the joint against the spring alone reads as k = −K, clamped to 0.
+  VT_EXPECT_TRUE(app.control().attachment().stiffness == Stiffness{});
+  VT_EXPECT_TRUE(!(app.control().attachment().damping == prior.damping));
+  VT_EXPECT_EQ(app.dropped_attachment_updates(), 0u);
 }
 
 MJC_VECTOR_TEST(JointApp, FaultStopsBridgeInSameTickAndLatches) {

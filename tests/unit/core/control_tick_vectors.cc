@@ -218,7 +218,7 @@ MJC_VECTOR_TEST(ControlTick, RefusedConfigKeepsTheOldOne) {
   bad.supervisor.torque_max = Torque::FromDouble(-1.0);  // would fault every tick
   VT_EXPECT_TRUE(tick.Configure(bad) == ControlConfigError::kSupervisor);
   VT_EXPECT_TRUE(tick.config().backlash.c_left == c.backlash.c_left);
-  VT_EXPECT_EQ(tick.delay_ticks(), 250);
+  VT_EXPECT_EQ(tick.delay_ticks(), c.velocity_window / 2);
 }
 
 MJC_VECTOR_TEST(ControlTick, ReconfiguringKeepsTheMotorAngle) {

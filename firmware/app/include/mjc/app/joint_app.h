@@ -101,7 +101,17 @@ class JointApp {
   // own, so the events stay small (128 bytes each otherwise, 8 KB over the event
   // queue); older sums whose events were lost are dropped on the way. False when they
   // are not there (the queue was full when the window ended).
-  bool PopWindowFit(std::uint32_t start_tick, InterfaceFitSums* out);
+  // `of_trial`, when given, says whether the window was a trial's (not a calibration
+  // sweep's).
+  bool PopWindowFit(std::uint32_t start_tick, InterfaceFitSums* out,
+                    bool* of_trial = nullptr);
+  // The attachment's fit of that window (PopWindowFit, SolveInterfaceFit; status
+  // kNotDelivered when its sums are not there). A valid fit of a trial's window with
+  // k, b ≥ 0 also becomes the velocity estimator's attachment model from the next tick
+  // (ControlTick::SetAttachment); a calibration sweep moves the robot without the hand,
+  // so its fits describe no attachment. Main-loop context.
+  InterfaceFit SolveWindowFit(std::uint32_t start_tick);
+  std::uint32_t dropped_attachment_updates() const { return attachments_.dropped(); }
   std::uint32_t dropped_window_fits() const { return window_fits_.dropped(); }
 
   // The configuration in force, as the main loop sees it: a consistent copy of the
@@ -196,16 +206,23 @@ class JointApp {
   SpscQueue<AppEvent, 64> events_;
   struct WindowFitSums {
     std::uint32_t start_tick = 0;
+    bool trial = false;  // a trial's window (windows_of_trial_ when it closed)
     InterfaceFitSums sums;
   };
   // Four windows: the main loop takes each with its kWindow event, and a trial ends at
   // most ten windows a second (5 Hz).
   SpscQueue<WindowFitSums, 4> window_fits_;
+  // Fits on their way to the tick's attachment model (SolveWindowFit); the tick takes
+  // one a tick, and a full queue drops the newest (the model keeps an older fit).
+  SpscQueue<AttachmentParams, 2> attachments_;
   std::atomic<std::int32_t> stream_target_{0};
   std::atomic<std::uint16_t> raised_fault_{0};  // a Fault code, 0 = none
   static_assert(std::atomic<std::uint16_t>::is_always_lock_free);
   // A ClearFaults the tick is judging: answered from ISR_AfterStep.
   bool clear_pending_ = false;
+  // The last motion started was a trial, not a calibration sweep: its windows' fits
+  // feed the attachment model (SolveWindowFit).
+  bool windows_of_trial_ = false;
   RequestTag clear_tag_ = 0;
   TickCount done_;  // ticks run to their end: Latest's consistent copy
   // Configurations the tick has applied; the main loop's copy and the count it was

@@ -6,8 +6,10 @@
 // Order within a tick, so that a fault disables the bridge in the tick that sees it:
 //   1 sample → θ_m (quadrature extension), θ_j (SPI frame, parity checked)
 //   2 forward backlash → θ̃_j;  SEA torque τ = K(θ̃_j − θ_j)
-//   3 velocity θ̇_j (least-squares slope, delay L); τ and the trajectory segment are
-//     delayed by the same L, so P = τ·θ̇_j and its window refer to one instant
+//   3 velocity θ̇_j: the attachment model follows θ̃_j (attachment_model.h); the
+//     least-squares slope of θ_j − θ_model (delay L) plus the model's own velocity;
+//     τ, θ_j and the trajectory segment are delayed by the same L, so P = τ·θ̇_j and its
+//     window refer to one instant
 //   4 P into the energy accumulator and the window tracker
 //   5 supervisor: any fault → bridge off now, latched
 //   6 trajectory → setpoint (→ inverse backlash if enabled) → position loop → duty
@@ -17,6 +19,7 @@
 #include <array>
 #include <cstdint>
 
+#include "mjc/core/attachment_model.h"
 #include "mjc/core/backlash.h"
 #include "mjc/core/encoder.h"
 #include "mjc/core/interface_energy.h"
@@ -38,8 +41,14 @@ struct ControlConfig {
   Stiffness sea_stiffness = Stiffness::FromDouble(0.63);
   // Command the cable side through the inverse backlash model instead of the motor.
   bool backlash_compensation = false;
-  // Velocity window, ticks: odd, up to kMaxVelocityWindow.
-  std::uint16_t velocity_window = 501;
+  // Velocity window, ticks: odd, up to kMaxVelocityWindow. 1001 at 10 kHz: a 50 ms
+  // delay, the longest the power estimate may lag (SIGNAL_CHAIN.md).
+  std::uint16_t velocity_window = 1001;
+  // The attachment the velocity estimator's model assumes until the board's own fit of
+  // a window replaces it (AttachmentParamsValid; attachment_model.h). A typical finger:
+  // k 4.5 N·m/rad, b 0.25 N·m·s/rad; a model 45 % off still serves.
+  AttachmentParams attachment_prior{Stiffness::FromDouble(4.5),
+                                    Damping::FromDouble(0.25)};
   PositionLoopConfig position;  // its tick_hz is ignored: tick_hz above applies
   SupervisorConfig supervisor;
 };
@@ -85,6 +94,7 @@ enum class ControlConfigError : std::uint8_t {
   kVelocityWindow = 6,
   kPositionLoop = 7,
   kSupervisor = 8,
+  kAttachmentPrior = 9,  // outside AttachmentParamsValid
 };
 
 struct Telemetry {
@@ -155,6 +165,13 @@ class ControlTick {
   }
   Fault fault() const { return supervisor_.latched(); }
 
+  // The attachment the velocity estimator's model now follows (tick context): a valid
+  // fit of a window (the main loop solves it) replaces the prior. False, changing
+  // nothing, outside AttachmentParamsValid. Kept through Configure() unless the
+  // config's prior changes.
+  bool SetAttachment(const AttachmentParams& params);
+  const AttachmentParams& attachment() const { return attachment_; }
+
   TrajectoryGenerator& trajectory() { return trajectory_; }
   std::uint16_t delay_ticks() const { return estimator_.delay_ticks(); }
   EnergyScale energy_scale() const { return EnergyScale(config_.tick_hz); }
@@ -170,21 +187,9 @@ class ControlTick {
   BacklashModel backlash_;
   InverseBacklash::State inverse_state_;
   InverseBacklash inverse_;
-  std::array<std::int32_t, kMaxVelocityWindow> window_storage_{};
-  // What waits delay_ticks() to meet the velocity estimate of its instant: each tick's
-  // torque and trajectory segment, in one ring with one index (as two DelayLines the
-  // tick spent 11 Cortex-M4 instructions more, mostly on the second index;
-  // tick_instructions_cm4).
-  // The torque is taken out and put in at step 3, the segment at step 6, then the
-  // index moves on.
-  struct Delayed {
-    std::int32_t torque = 0;  // Torque raw
-    Segment segment = Segment::kIdle;
-    std::uint16_t repetition = 0;
-  };
-  std::array<Delayed, kMaxVelocityWindow / 2> delayed_{};
   std::size_t delayed_next_ = 0;  // [0, delay_ticks())
-  VelocityEstimator estimator_;
+  AttachmentParams attachment_;
+  AttachmentModel model_;
   EnergyAccumulator energy_;
   WindowTracker windows_;
   TrajectoryGenerator trajectory_;
@@ -198,6 +203,7 @@ class ControlTick {
   std::uint32_t tick_ = 0;
   bool clear_requested_ = false;
   bool started_ = false;
+  bool configured_ = false;  // a Configure() applied (its prior is in attachment_)
   // The motor count is extended from the first tick since construction and never
   // restarted: the quadrature timer keeps counting through a reconfiguration, and
   // restarting from its raw unsigned value would read a pulley at −0.1 rad as +1.9.
@@ -207,6 +213,26 @@ class ControlTick {
   // θ_j and its count, the duty applied and the position loop's setpoint − θ_m behind
   // it, and an external fault raised since the last tick.
   SupervisorInput supervised_;
+  // The two rings last: 12 KB that, anywhere earlier, would put every member after them
+  // out of reach of a load's immediate offset (4 KB on the Cortex-M4), each access an
+  // address computation more (tick_instructions_cm4). The estimator is reached
+  // through its own `this`.
+  std::array<std::int32_t, kMaxVelocityWindow> window_storage_{};
+  VelocityEstimator estimator_;  // after its storage, which it keeps a span of
+  // What waits delay_ticks() to meet the velocity estimate of its instant: each tick's
+  // torque, joint angle, model step and trajectory segment, in one ring with one index
+  // (as two DelayLines the tick spent 11 Cortex-M4 instructions more, mostly on the
+  // second index; tick_instructions_cm4).
+  // The torque, angle and step are taken out and put in at step 3, the segment at
+  // step 6, then the index moves on.
+  struct Delayed {
+    std::int32_t torque = 0;      // Torque raw
+    std::int32_t joint = 0;       // θ_j, Angle raw
+    std::int32_t model_step = 0;  // the attachment model's step, ModelAngle raw
+    Segment segment = Segment::kIdle;
+    std::uint16_t repetition = 0;
+  };
+  std::array<Delayed, kMaxVelocityWindow / 2> delayed_{};
 };
 
 }  // namespace mjc

@@ -12,6 +12,9 @@ namespace mjc {
 
 // Q7.24: ±128 rad, 6.0e-8 rad. θ_m, θ_j, θ̃_j, c_r, c_l, setpoints.
 using Angle = Fixed<Radian, 24>;
+// Q4.27: ±16 rad, 7.5e-9 rad. The attachment model's joint angle (attachment_model.h),
+// whose per-tick steps are a velocity.
+using ModelAngle = Fixed<Radian, 27>;
 // Q11.20: ±2048 rad/s, 9.5e-7 rad/s. Joint and motor-pulley velocity.
 using AngularVelocity = Fixed<RadianPerSecond, 20>;
 // Q7.24: ±128 N·m, 6.0e-8 N·m. SEA torque, limits.

@@ -17,9 +17,13 @@
 //     S1' = S1 − S0 + x_0 + (N−1)·x_new,   S0' = S0 − x_0 + x_new
 //
 // Noise: with a 14-bit joint encoder (step q = 3.8e-4 rad) the slope's standard
-// deviation is about q·√(12/N³)/(√12·dt) — 3.4e-4 rad/s for N = 501 at 10 kHz, 0.17 %
-// of the 0.2 rad/s peak; the amplitude error on a 0.5 Hz sinusoid is
-// 1 − 3(sin x − x cos x)/x³ ≈ x²/10 with x = πf·N·dt: 0.06 % for N = 501.
+// deviation is about q·√(12/N³)/(√12·dt) — 1.2e-4 rad/s for N = 1001 at 10 kHz from
+// the quantisation alone (the simulated encoder's 0.7 counts of noise make it 3.3e-4);
+// the amplitude error on a 0.5 Hz sinusoid is 1 − 3(sin x − x cos x)/x³ ≈ x²/10 with
+// x = πf·N·dt: 0.25 % for N = 1001, on whatever the samples hold. The tick feeds it
+// θ_j less the attachment model (attachment_model.h) and adds the model's velocity at
+// the centre (Update's centre_step): the slope then follows only what the model
+// missed, and the joint's kinks at the cable's slack do not bias a window this long.
 #pragma once
 
 #include <cstddef>
@@ -31,9 +35,9 @@
 namespace mjc {
 
 struct VelocityEstimatorConfig {
-  // Window length N in ticks: odd, kMinWindow..storage size. 501 at 10 kHz is a 50 ms
-  // window and a 25 ms delay (SIGNAL_CHAIN.md: with a 14-bit encoder a 50 ms window keeps
-  // the velocity noise near 0.2 % of a 0.2 rad/s peak).
+  // Window length N in ticks: odd, kMinWindow..storage size (and kMaxWindow). 501 at
+  // 10 kHz is a 50 ms window and a 25 ms delay; the tick's default is 1001
+  // (ControlConfig::velocity_window, SIGNAL_CHAIN.md).
   std::uint16_t window = 501;
   std::uint32_t tick_hz = 10000;  // 100..100000
 };
@@ -49,9 +53,11 @@ enum class VelocityEstimatorError : std::uint8_t {
 class VelocityEstimator {
  public:
   // 3.3 ms at 10 kHz: shorter windows only differentiate encoder steps. Configure()
-  // also refuses a window whose 1/(D·dt) scale does not fit its multiplier (below 69
+  // also refuses a window whose 1/(D·dt) scale does not fit its multiplier (below 35
   // ticks at 100 kHz).
   static constexpr std::uint16_t kMinWindow = 33;
+  // 205 ms at 10 kHz; keeps the sums of Update() within int64.
+  static constexpr std::uint16_t kMaxWindow = 2047;
 
   // `storage` holds the window's samples; it must outlive the estimator.
   explicit VelocityEstimator(std::span<std::int32_t> storage) : storage_(storage) {}
@@ -66,10 +72,12 @@ class VelocityEstimator {
   // Fills the window with a constant angle: velocity reads zero from the next update.
   void Reset(Angle angle);
 
-  // One tick: the newest joint angle in, the slope at the window's centre out, i.e.
-  // the velocity delay_ticks() ticks ago. Saturates at the AngularVelocity range.
-  // Reads zero until Configure() succeeded.
-  AngularVelocity Update(Angle angle);
+  // One tick: the newest sample in, the slope at the window's centre plus
+  // `centre_step` out, i.e. the velocity delay_ticks() ticks ago. `centre_step` is a
+  // known part of the velocity at the centre, in ModelAngle raw per tick: the step of
+  // the model whose residual the samples are (attachment_model.h), 0 for a plain slope.
+  // Saturates at the AngularVelocity range. Reads zero until Configure() succeeded.
+  AngularVelocity Update(Angle angle, std::int32_t centre_step = 0);
 
   // The sample delay_ticks() old (the window's centre): the angle the last Update()'s
   // velocity refers to. Zero until Configure() succeeded.
@@ -86,7 +94,8 @@ class VelocityEstimator {
  private:
   std::span<std::int32_t> storage_;
   std::uint16_t window_ = 0;
-  std::int32_t multiplier_ = 0;  // f_tick / (16·D) as multiplier_ / 2^shift_
+  std::int32_t multiplier_ = 0;  // f_tick / (128·D) as multiplier_ / 2^shift_
+  std::int32_t d_ = 0;           // D = N(N²−1)/12
   int shift_ = 32;
   std::size_t oldest_ = 0;
   std::int64_t s0_ = 0;

@@ -95,6 +95,12 @@ inline constexpr std::int64_t kI32Min = std::numeric_limits<std::int32_t>::min()
   X(kVelocityWindow, 0x0210, "velocity_window", "ticks", 0,                              \
     VelocityEstimator::kMinWindow, ControlTick::kMaxVelocityWindow, kControl,            \
     "joint velocity estimator's window (odd; its delay aligns the torque)")              \
+  X(kAttachmentPriorStiffness, 0x0211, "attachment_prior_stiffness", "N.m/rad",          \
+    Stiffness::kFracBits, 0, param_detail::kI32Max, kControl,                            \
+    "attachment k the velocity model assumes until a trial's window is fitted")          \
+  X(kAttachmentPriorDamping, 0x0212, "attachment_prior_damping", "N.m.s/rad",            \
+    Damping::kFracBits, 0, param_detail::kI32Max, kControl,                              \
+    "attachment b the velocity model assumes until a trial's window is fitted")          \
   X(kTorqueMax, 0x0300, "torque_max", "N.m", Torque::kFracBits, 1,                       \
     param_detail::kI32Max, kControl, "SEA torque limit (fault 202 beyond it)")           \
   X(kCalibrationRight, 0x0400, "calibration_c_right", "rad", Angle::kFracBits,           \
@@ -182,7 +188,7 @@ consteval std::uint32_t ParamListDigest() {
 // an existing parameter means (its id, key, unit, format or range), raise kVersion;
 // then write the new digest here (the compiler's message names it: "ParamListIs()
 // [with ... kDigest = N]").
-inline constexpr std::uint32_t kParamListDigest = 1480729836;
+inline constexpr std::uint32_t kParamListDigest = 493797895;
 template <std::uint32_t kDigest>
 constexpr bool ParamListIs() {
   static_assert(kDigest == kParamListDigest,
