@@ -20,9 +20,10 @@
 //
 // Nothing depends on the model being right: θ̇_j = slope(θ_j − θ_model) + θ̇_model is
 // an identity for any model sequence, and the estimate is exactly the plain slope's
-// when the model stands still. A model 45 % off in k and b still halves the error of
-// the plain 100 ms slope; three times off, it doubles it (measured in the simulator,
-// subject 2 at 6°, 0.5 Hz: SIGNAL_CHAIN.md). Hence the board feeds it its own fit.
+// when the model stands still. A model with k 45 % and b 31 % low still cuts the plain
+// 100 ms slope's power error by 40 % (2.85 → 1.74 % of peak); with both a third of the
+// truth it doubles it (5.56 %) (subject 2 at 6°, 0.5 Hz: SIGNAL_CHAIN.md). Hence the
+// board feeds it its own fit.
 // The constant c is not identified: an offset of the model changes no slope, so the
 // offset only puts the model's equilibrium where the joint was when it started
 // (Reset) and keeps its velocity from jumping when a new fit arrives (Configure).
