@@ -11,9 +11,10 @@ std::int32_t UnitFraction(std::int64_t numerator, std::int64_t denominator) {
       ((numerator << Coefficient::kFracBits) + denominator / 2) / denominator);
 }
 
-// round(a·b / 2^30) for Q30 factors, a ≥ 0 (ties toward +∞).
-std::int64_t MulQ30(std::int64_t a, std::int64_t b) {
-  return (a * b + (std::int64_t{1} << 29)) >> Coefficient::kFracBits;
+// round(a·b / 2^30) for a Q30 factor (ties toward +∞).
+std::int64_t MulQ30(std::int32_t a, std::int32_t b) {
+  return fixed_detail::RoundingShiftRight(fixed_detail::WideProduct(a, b),
+                                          Coefficient::kFracBits);
 }
 
 }  // namespace

@@ -63,12 +63,9 @@ ControlConfigError ControlTick::Configure(const ControlConfig& config) {
   const ControlConfigError error = Validate(config);
   if (error != ControlConfigError::kOk) return error;
   estimator_.Configure({.window = config.velocity_window, .tick_hz = config.tick_hz});
-  const bool new_prior =
-      !configured_ ||
-      config.attachment_prior.stiffness != config_.attachment_prior.stiffness ||
-      config.attachment_prior.damping != config_.attachment_prior.damping;
-  if (new_prior) attachment_ = config.attachment_prior;
-  configured_ = true;
+  if (config.attachment_prior != config_.attachment_prior) {
+    attachment_ = config.attachment_prior;
+  }
 
   config_ = config;
   config_.position.tick_hz = config.tick_hz;

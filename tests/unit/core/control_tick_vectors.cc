@@ -221,6 +221,28 @@ MJC_VECTOR_TEST(ControlTick, RefusedConfigKeepsTheOldOne) {
   VT_EXPECT_EQ(tick.delay_ticks(), c.velocity_window / 2);
 }
 
+MJC_VECTOR_TEST(ControlTick, AFittedAttachmentOutlivesAConfigureThatKeepsThePrior) {
+  // The velocity model's attachment: the config's prior, then a fit; a Configure that
+  // changes something else (a calibration, a gain) keeps the fit, one with a new prior
+  // takes that prior; a negative fit is refused and changes nothing.
+  static ControlTick tick;
+  ControlConfig c = PaperConfig();
+  VT_EXPECT_TRUE(tick.Configure(c) == ControlConfigError::kOk);
+  VT_EXPECT_TRUE(tick.attachment() == c.attachment_prior);
+  const AttachmentParams fit{Stiffness::FromDouble(5.5), Damping::FromDouble(0.29)};
+  VT_EXPECT_TRUE(tick.SetAttachment(fit));
+  VT_EXPECT_TRUE(!tick.SetAttachment({Stiffness::FromDouble(-1.0), Damping{}}));
+  VT_EXPECT_TRUE(tick.attachment() == fit);
+  c.sea_stiffness = Stiffness::FromDouble(0.7);
+  VT_EXPECT_TRUE(tick.Configure(c) == ControlConfigError::kOk);
+  VT_EXPECT_TRUE(tick.attachment() == fit);
+  c.attachment_prior = {Stiffness::FromDouble(3.0), Damping::FromDouble(0.2)};
+  VT_EXPECT_TRUE(tick.Configure(c) == ControlConfigError::kOk);
+  VT_EXPECT_TRUE(tick.attachment() == c.attachment_prior);
+  c.attachment_prior.damping = Damping::FromDouble(-0.1);
+  VT_EXPECT_TRUE(tick.Configure(c) == ControlConfigError::kAttachmentPrior);
+}
+
 MJC_VECTOR_TEST(ControlTick, ReconfiguringKeepsTheMotorAngle) {
   // The pulley rests at −0.1 rad (the timer's unsigned count just below 65,536) when a
   // calibration or parameter write reconfigures the tick: the angle must carry on, not

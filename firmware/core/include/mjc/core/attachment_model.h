@@ -48,6 +48,8 @@ namespace mjc {
 struct AttachmentParams {
   Stiffness stiffness;  // k, N·m/rad: [0, 128)
   Damping damping;      // b, N·m·s/rad: [0, 128)
+  friend constexpr bool operator==(const AttachmentParams&,
+                                   const AttachmentParams&) = default;
 };
 
 // Whether the model accepts `params`: k ≥ 0 and b ≥ 0.

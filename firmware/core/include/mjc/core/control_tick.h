@@ -188,7 +188,8 @@ class ControlTick {
   InverseBacklash::State inverse_state_;
   InverseBacklash inverse_;
   std::size_t delayed_next_ = 0;  // [0, delay_ticks())
-  AttachmentParams attachment_;
+  // The prior of the config in force until a fit replaces it (SetAttachment).
+  AttachmentParams attachment_ = ControlConfig{}.attachment_prior;
   AttachmentModel model_;
   EnergyAccumulator energy_;
   WindowTracker windows_;
@@ -203,7 +204,6 @@ class ControlTick {
   std::uint32_t tick_ = 0;
   bool clear_requested_ = false;
   bool started_ = false;
-  bool configured_ = false;  // a Configure() applied (its prior is in attachment_)
   // The motor count is extended from the first tick since construction and never
   // restarted: the quadrature timer keeps counting through a reconfiguration, and
   // restarting from its raw unsigned value would read a pulley at −0.1 rad as +1.9.
