@@ -63,6 +63,13 @@ constexpr std::uint32_t kBusOffRecoveryTicks = 15;
 // holds it there, and lets everything settle before clearing (longer than any window
 // of the velocity estimator, so no motion before the return is still in its window).
 constexpr std::uint32_t kHandReturnTicks = 5000;
+// The velocity case's persisting cause: after the stop the operator's hand drives the
+// unpowered pulley on, in the direction of the motion, at this speed (motor-pulley
+// rad/s). Through subject1's hand the joint follows about an eighth of it (±0.053
+// rad of joint for ±0.435 rad of pulley in the trial), some 0.37 rad/s, over seven times
+// the lowered limit and far outside the mean's noise (σ ≈ 0.008 rad/s: 0.7 counts of
+// joint noise on each of two readings 50 ms apart).
+constexpr double kHandSpeedRadS = 3.0;
 constexpr std::uint32_t kHandHoldTicks = 1000;
 constexpr std::uint32_t kSettleTicks = 3000;
 
@@ -92,23 +99,6 @@ class SampleReference {
   explicit SampleReference(const ControlConfig& config) : config_(config) {}
 
   void set_config(const ControlConfig& config) { config_ = config; }
-  // The attachment (k, b) the board's velocity model follows from this tick on
-  // (ControlTick::attachment()); a change bends the model's path without a step in its
-  // velocity, as attachment_model.h describes.
-  void set_attachment(double k, double b) {
-    const double sea = config_.sea_stiffness.ToDouble();
-    const double beta = sea / (sea + k);
-    const double gain = (sea + k) / (sea + k + b * config_.tick_hz);
-    if (seeded_ && (k != k_ || b != b_)) {
-      const double target = beta_ * model_cable_ + offset_;
-      const double moved = model_ + gain_ / gain * (target - model_);
-      offset_ = std::clamp(moved - beta * model_cable_, -2.0, 2.0);
-    }
-    k_ = k;
-    b_ = b;
-    beta_ = beta;
-    gain_ = gain;
-  }
   // The firmware restarts its signal chain when a config or calibration is applied;
   // the reference starts again on the same tick's sample.
   void Restart() { seeded_ = false; }
@@ -146,36 +136,17 @@ class SampleReference {
     cable_ = std::clamp(seeded_ ? cable_ : joint_, lower, upper);
     torque_ = config_.sea_stiffness.ToDouble() * (cable_ - joint_);
 
-    // The attachment model (attachment_model.h: b·θ̇ = K(θ̃ − θ) − k·θ + c by backward
-    // Euler, the cable side clamped to ±4 rad), starting at rest at θ_j.
-    model_cable_ = std::clamp(cable_, -4.0, 4.0);
+    // The joint's mean speed over the velocity span, (N − 1)/2 ticks (supervisor.h):
+    // this θ_j less the one a span before, from a history that starts full of the
+    // first reading.
+    const std::size_t span = (std::size_t{config_.velocity_window} - 1) / 2;
     if (!seeded_) {
-      model_ = std::clamp(joint_, -4.0, 4.0);
-      offset_ = std::clamp(model_ - beta_ * model_cable_, -2.0, 2.0);
-      model_ = beta_ * model_cable_ + offset_;
+      history_.assign(span, joint_);
+      next_ = 0;
     }
-    const double before = model_;
-    model_ += gain_ * (beta_ * model_cable_ + offset_ - model_);
-    // The least-squares slope over the last N good joint angles less the model at the
-    // middle of its step, plus the model's step at the window's centre (the
-    // estimator's definition), a window that starts full of zero residuals.
-    const std::size_t n = config_.velocity_window;
-    if (!seeded_) {
-      window_.assign(n, 0.0);
-      steps_.assign(n, 0.0);
-    }
-    window_[next_] = joint_ - (model_ + before) / 2.0;
-    steps_[next_] = model_ - before;
-    next_ = (next_ + 1) % n;
-    const double centre = static_cast<double>(n - 1) / 2.0;
-    double sum = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      sum += (static_cast<double>(i) - centre) * window_[(next_ + i) % n];
-    }
-    const double nd = static_cast<double>(n);
-    const double d = nd * (nd * nd - 1.0) / 12.0;
-    const double centre_step = steps_[(next_ + (n - 1) / 2) % n];
-    velocity_ = (sum / d + centre_step) * config_.tick_hz;
+    velocity_ = (joint_ - history_[next_]) * config_.tick_hz / static_cast<double>(span);
+    history_[next_] = joint_;
+    next_ = (next_ + 1) % span;
 
     // The supervisor's history rules (supervisor.cc), on these numbers: history
     // starts with the first sample after a restart.
@@ -202,7 +173,7 @@ class SampleReference {
   double joint() const { return joint_; }        // last good θ_j, rad
   double motor() const { return motor_; }        // θ_m, motor-pulley rad
   double torque() const { return torque_; }      // τ, N·m
-  double velocity() const { return velocity_; }  // the window's slope, rad/s
+  double velocity() const { return velocity_; }  // mean over the span, rad/s
   bool joint_jump() const { return joint_jump_; }
   bool joint_stuck() const { return joint_stuck_; }
   bool motor_stuck() const { return motor_stuck_; }
@@ -225,10 +196,8 @@ class SampleReference {
   std::uint16_t joint_count_ = 0, last_joint_count_ = 0, last_raw_motor_ = 0;
   std::int64_t motor_count_ = 0, last_motor_count_ = 0;
   double joint_ = 0, motor_ = 0, cable_ = 0, torque_ = 0, motor_at_joint_change_ = 0;
-  std::vector<double> window_, steps_;
-  std::size_t next_ = 0;
-  double k_ = -1, b_ = -1, beta_ = 0, gain_ = 0, offset_ = 0, model_ = 0,
-         model_cable_ = 0;
+  std::vector<double> history_;  // θ_j of the span's last ticks
+  std::size_t next_ = 0;         // the oldest
   double velocity_ = 0;
   std::uint32_t motor_frozen_ticks_ = 0;
   bool joint_jump_ = false, joint_stuck_ = false, motor_stuck_ = false;
@@ -302,6 +271,13 @@ class Rig {
   app::BoardState state() { return board_.app().state(); }
   // Plant-truth joint velocity at the instant tick `tick`'s sample was taken.
   double truth_velocity(std::uint32_t tick) const { return truth_velocity_.at(tick); }
+  // Its mean over the `span` ticks up to now, as the board's travel spans them: the
+  // speeds at the instants between the two readings, the ends counted half.
+  double truth_mean_velocity(std::uint32_t span) const {
+    double sum = 0.5 * (truth_velocity(now() - span) + truth_velocity(now()));
+    for (std::uint32_t i = 1; i < span; ++i) sum += truth_velocity(now() - i);
+    return sum / span;
+  }
 
   // Powers on, calibrates, lowers the torque limit (its case), starts heartbeats.
   void PowerOn() {
@@ -388,9 +364,6 @@ class Rig {
     if (board_.app().last().telemetry.tick != next_tick_) Fail("tick count mismatch");
     if (restart_pending_) reference_.Restart();
     restart_pending_ = false;
-    const AttachmentParams& attachment = board_.app().control().attachment();
-    reference_.set_attachment(attachment.stiffness.ToDouble(),
-                              attachment.damping.ToDouble());
     reference_.Update(board_.io().last_sample(), applied_duty_, applied_error_);
     applied_duty_ = board_.io().duty();
     applied_error_ =
@@ -546,9 +519,9 @@ class Rig {
 };
 
 // Whether the cause of `c` shows on the last tick's sample, by the reference. For the
-// velocity limit both the windowed slope the board judges and the plant truth at the
-// instant it refers to (`delay` ticks back) must be beyond.
-bool CausePresent(FaultCase c, Rig& rig, std::uint16_t delay) {
+// velocity limit both the mean speed the board judges and the plant truth's mean over
+// the same span must be beyond.
+bool CausePresent(FaultCase c, Rig& rig, std::uint16_t span) {
   const SampleReference& r = rig.reference();
   switch (c) {
     case FaultCase::kJointParity:
@@ -565,7 +538,7 @@ bool CausePresent(FaultCase c, Rig& rig, std::uint16_t delay) {
       return std::fabs(r.torque()) > kTorqueMaxNm;
     case FaultCase::kVelocityLimit:
       return std::fabs(r.velocity()) > kVelocityMaxRadS &&
-             std::fabs(rig.truth_velocity(rig.now() - delay)) > kVelocityMaxRadS;
+             std::fabs(rig.truth_mean_velocity(span)) > kVelocityMaxRadS;
     default:
       return false;
   }
@@ -576,12 +549,12 @@ bool CausePresent(FaultCase c, Rig& rig, std::uint16_t delay) {
 // against the hand (b/(K + k) = 49 ms), so the clear is judged on a sample clearly
 // beyond the limit rather than one within the encoder's noise of the crossing. Motor
 // angle: at once (the motor count has no noise, and within tens of ms the spring
-// back-drives the unpowered pulley inside the limit). Velocity: when the estimate
-// refers to half its delay after the crossing, well inside the stretch the truth is
-// beyond.
-std::uint32_t RefusalDelay(FaultCase c, std::uint16_t delay) {
+// back-drives the unpowered pulley inside the limit). Velocity: a span and a half, the
+// operator's hand driving the joint on meanwhile (kHandSpeedRadS), so that the whole
+// span the mean covers is that motion.
+std::uint32_t RefusalDelay(FaultCase c, std::uint16_t span) {
   if (c == FaultCase::kJointAngleLimit || c == FaultCase::kTorqueLimit) return 1000;
-  if (c == FaultCase::kVelocityLimit) return delay / 2u;
+  if (c == FaultCase::kVelocityLimit) return 3u * span / 2u;
   return 1;
 }
 
@@ -771,6 +744,9 @@ Measurement Measure(FaultCase c) {
     }
     m.velocity_before_stop = m.velocity_at_stop;
     m.velocity_at_stop = std::fabs(r.velocity());
+    if (c == FaultCase::kVelocityLimit && rig.now() >= m.delay_ticks) {
+      m.truth_mean_at_stop = std::fabs(rig.truth_mean_velocity(m.delay_ticks));
+    }
     if (!rig.bridge()) {
       m.stop_tick = tick;
       m.raised = rig.board().app().last().raised;
@@ -797,10 +773,21 @@ Measurement Measure(FaultCase c) {
   };
   if (CausePersists(c)) {
     const std::uint32_t at = m.stop_tick + RefusalDelay(c, m.delay_ticks);
-    while (rig.now() < at) tick_latched();
+    // The velocity's cause kept up by hand: the pulley driven on from where it is.
+    const double hand_from = rig.board().plant().truth().motor_pulley_angle_rad;
+    const double hand_rate =
+        std::copysign(kHandSpeedRadS, rig.truth_velocity(rig.now())) /
+        static_cast<double>(m.tick_hz);
+    std::uint32_t hand_ticks = 0;
+    const auto tick_refusing = [&] {
+      if (c != FaultCase::kVelocityLimit) return tick_latched();
+      const double pulley = hand_from + hand_rate * ++hand_ticks;
+      tick_latched(&pulley);
+    };
+    while (rig.now() < at) tick_refusing();
     m.refusal_tried = true;
     const std::uint8_t seq = rig.SendCommand(CommandCode::kClearFaults);
-    tick_latched();  // judges the clear on this tick's sample
+    tick_refusing();  // judges the clear on this tick's sample
     m.cause_present_at_refusal = CausePresent(c, rig, m.delay_ticks);
     m.fault_after_refusal = !rig.bridge() && rig.state() == app::BoardState::kFault;
     const auto outcome = rig.AwaitResult(CommandCode::kClearFaults, seq);

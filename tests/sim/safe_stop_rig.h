@@ -38,13 +38,13 @@
 //                                    play operator with the uploaded calibration,
 //                                    K·(θ̃ − θ_j)). Velocity: from the first sample
 //                                    instant whose plant-truth joint velocity exceeds
-//                                    the limit. The board judges the aligned estimate,
-//                                    centred delay_ticks() back, so this stop is not 0
-//                                    ticks; `detectable_tick` is where that estimate,
-//                                    recomputed in double on the raw samples (the
-//                                    slope of θ_j less the attachment model, plus the
-//                                    model's velocity), first comes within
-//                                    kVelocityReferenceTolRadS of the limit
+//                                    the limit. The board judges the joint's mean
+//                                    speed over the last delay_ticks() ticks (its
+//                                    travel over that span), whose middle is half the
+//                                    span back, so this stop is not 0 ticks;
+//                                    `detectable_tick` is where that mean, recomputed
+//                                    in double on the raw joint frames, first comes
+//                                    within kVelocityReferenceTolRadS of the limit
 //   tick_overrun                     SimJointIo::InjectOverrun before every tick until
 //                                    the cause is removed (a tick that keeps running
 //                                    late); from the first late sample
@@ -121,11 +121,12 @@ const char* Name(FaultCase c);
 // The supervisor's code the case must latch.
 Fault ExpectedFault(FaultCase c);
 
-// How far the board's velocity estimate may lie from the double-precision reference's:
-// the attachment model's per-tick step is rounded to ModelAngle (±0.5 LSB, 3.7e-5 rad/s
-// at 10 kHz, attachment_model.h), and the estimate to AngularVelocity. The velocity
-// rule's detectable tick is where the reference first comes within this of the limit.
-inline constexpr double kVelocityReferenceTolRadS = 5e-5;
+// How far the mean speed the board judges may lie from the double-precision
+// reference's: the board's two θ_j are each Angle-rounded (±0.5 LSB, 2^-24 rad), so
+// their difference is within 1 LSB, 1.2e-6 rad/s over the 500-tick span at 10 kHz; the
+// comparison with the limit is exact (supervisor.h). The velocity rule's detectable
+// tick is where the reference first comes within this of the limit.
+inline constexpr double kVelocityReferenceTolRadS = 2e-6;
 inline constexpr double kVelocityMaxRadS = 0.1;
 
 struct Measurement {
@@ -139,10 +140,11 @@ struct Measurement {
   std::uint32_t detectable_tick = 0;  // stuck: first sample meeting the rule; else cause
   std::uint32_t stop_tick = 0;        // first tick whose written actuation is disabled
   Fault raised = Fault::kNone;        // what the board latched in the stop tick
-  std::uint16_t delay_ticks = 0;      // the velocity estimator's delay
-  // The reference's |velocity| on the tick before the stop and on the stop's tick.
+  std::uint16_t delay_ticks = 0;      // the velocity estimator's delay: the limit's span
+  // The reference's |mean speed| on the tick before the stop and on the stop's tick.
   double velocity_before_stop = 0;
   double velocity_at_stop = 0;
+  double truth_mean_at_stop = 0;  // the plant's mean joint speed over that span then
   std::uint16_t host_timeout_ms = 0;
   std::uint16_t stream_timeout_ms = 0;
 

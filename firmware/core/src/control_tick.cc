@@ -72,6 +72,8 @@ ControlConfigError ControlTick::Configure(const ControlConfig& config) {
   motor_encoder_.Reconfigure();
   backlash_.Configure(config_.sea_stiffness);
   model_.Configure(config_.sea_stiffness, attachment_, config_.tick_hz);
+  // The velocity limit's span is the ring's: θ_j of delay_ticks() ago is at hand.
+  supervisor_.SetVelocitySpan(estimator_.delay_ticks(), config_.tick_hz);
   inverse_.Configure();
   loop_.Configure();
   windows_ = WindowTracker(config_.tick_hz);
@@ -175,7 +177,10 @@ void ControlTick::ISR_Step(const Sample& sample, TickResult* out) {
   supervised_.motor_count = motor_encoder_.extended_count();
   supervised_.motor = motor;
   supervised_.torque = torque;
-  supervised_.joint_velocity = velocity;
+  // The velocity limit judges the joint's own travel over the ring's span (the
+  // supervisor's mean speed), not the aligned estimate: no model in it, and its instant
+  // is half as old (supervisor.h).
+  supervised_.joint_travel = joint - aligned_joint;
   supervised_.tick_overrun = sample.tick_overrun;
   r.clear = FaultClear::kNone;
   if (clear_requested_) {

@@ -1,5 +1,8 @@
 #include "mjc/core/supervisor.h"
 
+#include <algorithm>
+#include <limits>
+
 namespace mjc {
 
 SupervisorConfigError Validate(const SupervisorConfig& c) {
@@ -14,6 +17,18 @@ SupervisorConfigError Validate(const SupervisorConfig& c) {
   if (c.motor_stuck_ticks == 0) return E::kMotorStuckTicks;
   if (c.stuck_hold_error <= Angle{}) return E::kStuckHoldError;
   return E::kOk;
+}
+
+void Supervisor::SetVelocitySpan(std::uint32_t span_ticks, std::uint32_t tick_hz) {
+  constexpr int kShift = Angle::kFracBits - AngularVelocity::kFracBits;
+  static_assert(kShift >= 0);
+  // v < 2^31 LSBs, span < 2^32: the product needs 64 bits before the division. A
+  // threshold beyond Angle's range is one no travel can pass.
+  const std::int64_t v = config_->velocity_max.raw();
+  const std::int64_t travel = (v << kShift) * static_cast<std::int64_t>(span_ticks) /
+                              static_cast<std::int64_t>(tick_hz);
+  travel_max_ = Angle::FromRaw(static_cast<std::int32_t>(
+      std::min<std::int64_t>(travel, std::numeric_limits<std::int32_t>::max())));
 }
 
 bool Supervisor::Clear(const SupervisorInput& in) {

@@ -35,6 +35,11 @@ constexpr double kJointCountRad =
 constexpr double kMotorCountRad = 2.0 * std::numbers::pi / 204800.0;  // 2048 edges, 100:1
 constexpr double kJointCountsPerRad = 1.0 / kJointCountRad;
 constexpr double kMotorCountsPerRad = 1.0 / kMotorCountRad;
+// The velocity limit's span as the board sets it (the velocity estimator's delay at the
+// default 1001-tick window) and its tick rate: a mean speed v is a travel v·span/rate.
+constexpr std::uint32_t kSpanTicks = 500;
+constexpr std::uint32_t kTickHz = 10000;
+constexpr double kSpanS = static_cast<double>(kSpanTicks) / kTickHz;
 
 std::int64_t RoundToInt(double x) {
   return static_cast<std::int64_t>(x < 0 ? x - 0.5 : x + 0.5);
@@ -42,7 +47,8 @@ std::int64_t RoundToInt(double x) {
 
 // A good sample of a joint at `joint` rad and a motor pulley at `motor` rad, as the
 // encoders report them: both angles on their count grids. The position loop is `error`
-// rad off its setpoint (by default behind a moving one).
+// rad off its setpoint (by default behind a moving one). The joint moved at a mean
+// `joint_velocity` rad/s over the velocity span.
 SupervisorInput Sample(double joint, double motor, double torque = 0.05,
                        double joint_velocity = 0.0, double duty = 0.1,
                        double error = 0.01) {
@@ -53,7 +59,7 @@ SupervisorInput Sample(double joint, double motor, double torque = 0.05,
   in.motor_count = RoundToInt(motor * kMotorCountsPerRad);
   in.motor = Angle::Quantize(static_cast<double>(in.motor_count) * kMotorCountRad);
   in.torque = Torque::Quantize(torque);
-  in.joint_velocity = AngularVelocity::Quantize(joint_velocity);
+  in.joint_travel = Angle::Quantize(joint_velocity * kSpanS);
   in.applied_duty = Duty::Quantize(duty);
   in.motor_error = Angle::Quantize(error);
   return in;
@@ -63,7 +69,9 @@ int F(Fault f) { return static_cast<int>(f); }
 
 // A supervisor with its config and state, and the tick counter a control loop keeps.
 struct Rig {
-  explicit Rig(const SupervisorConfig& c = SupervisorConfig{}) : config(c) {}
+  explicit Rig(const SupervisorConfig& c = SupervisorConfig{}) : config(c) {
+    supervisor.SetVelocitySpan(kSpanTicks, kTickHz);
+  }
   Rig(const Rig&) = delete;
   Rig& operator=(const Rig&) = delete;
 
@@ -213,12 +221,64 @@ MJC_VECTOR_TEST(SupervisorFault, TorqueLimit) {
 }
 
 MJC_VECTOR_TEST(SupervisorFault, VelocityLimit) {
-  // |θ̇_j| <= 5 rad/s.
+  // The joint's mean speed over the span, |θ_j(n) − θ_j(n − span)|·rate/span <= 5 rad/s.
   CheckVisibleCauseLifecycle(vt_context, Sample(0.3, 0.32, 0.05, 4.9),
                              Sample(0.3, 0.32, 0.05, 5.1), Fault::kVelocityLimit);
   CheckVisibleCauseLifecycle(vt_context, Sample(0.3, 0.32, 0.05, -4.9),
                              Sample(0.3, 0.32, 0.05, -5.1), Fault::kVelocityLimit);
   VT_EXPECT_EQ(F(Fault::kVelocityLimit), 203);
+}
+
+// The travel threshold against the exact rational rule, cross-multiplied so that no
+// division is in the reference: a travel t (Angle LSBs) over s ticks at r Hz is beyond
+// v (AngularVelocity LSBs) iff t·r > v·2^4·s (Angle has 4 fraction bits more). Spans
+// and rates that divide nothing evenly, travels around the threshold, both signs.
+MJC_VECTOR_TEST(Supervisor, VelocitySpanThresholdIsTheExactMeanSpeed) {
+  struct Case {
+    double velocity_max;
+    std::uint32_t span, rate;
+  };
+  const Case cases[] = {{5.0, 500, 10000},   {0.1, 500, 10000}, {3.3, 7, 3000},
+                        {0.77, 1023, 20000}, {1.0, 16, 1000},   {2.9, 333, 9999}};
+  int wrong = 0, tried = 0;
+  for (const Case& k : cases) {
+    SupervisorConfig config;
+    config.velocity_max = AngularVelocity::Quantize(k.velocity_max);
+    Supervisor::State state;
+    Supervisor supervisor{&config, &state};
+    supervisor.SetVelocitySpan(k.span, k.rate);
+    const std::int64_t v = config.velocity_max.raw();
+    // The boundary travel in double, then ±3 LSBs around it.
+    const auto centre = static_cast<std::int64_t>(static_cast<double>(v) * 16.0 *
+                                                  static_cast<double>(k.span) / k.rate);
+    for (std::int64_t t = centre - 3; t <= centre + 3; ++t) {
+      for (const int sign : {1, -1}) {
+        const bool beyond = t * k.rate > v * 16 * static_cast<std::int64_t>(k.span);
+        SupervisorInput in = Rest();
+        in.joint_travel = Angle::FromRaw(static_cast<std::int32_t>(sign * t));
+        Supervisor::State fresh;
+        Supervisor judge{&config, &fresh};
+        judge.SetVelocitySpan(k.span, k.rate);
+        const bool faulted = judge.Check(0, in) == Fault::kVelocityLimit;
+        if (faulted != beyond) ++wrong;
+        ++tried;
+      }
+    }
+  }
+  VT_EXPECT_EQ(tried, 6 * 7 * 2);
+  VT_EXPECT_EQ(wrong, 0);
+}
+
+// Until its span is set the velocity limit trips on any motion: a supervisor someone
+// forgot to give a span stops the motor rather than leaving the limit unchecked.
+MJC_VECTOR_TEST(Supervisor, WithoutASpanAnyTravelTripsTheVelocityLimit) {
+  SupervisorConfig config;
+  Supervisor::State state;
+  Supervisor supervisor{&config, &state};
+  SupervisorInput in = Rest();
+  VT_EXPECT_EQ(F(supervisor.Check(0, in)), F(Fault::kNone));
+  in.joint_travel = Angle::Epsilon();
+  VT_EXPECT_EQ(F(supervisor.Check(1, in)), F(Fault::kVelocityLimit));
 }
 
 MJC_VECTOR_TEST(SupervisorFault, TickOverrun) {
@@ -473,14 +533,17 @@ MJC_VECTOR_TEST(Supervisor, ThresholdsExactlyAtTheLimitPassOneLsbBeyondFaults) {
     in.torque = torque;
     return in;
   };
-  auto velocity_at = [](AngularVelocity v) {
+  // The travel over the span at a mean speed of exactly velocity_max: 5 rad/s over 500
+  // ticks at 10 kHz is 0.25 rad, which Angle holds exactly.
+  const Angle travel_max = Angle::Quantize(c.velocity_max.ToDouble() * kSpanS);
+  VT_EXPECT_EQ(travel_max.ToDouble(), 0.25);
+  auto travel_of = [](Angle travel) {
     SupervisorInput in = Rest();
-    in.joint_velocity = v;
+    in.joint_travel = travel;
     return in;
   };
   const Angle jn = Angle::FromDouble(0.005);
   const Torque te = Torque::Epsilon();
-  const AngularVelocity ve = AngularVelocity::Epsilon();
   const Edge edges[] = {
       {joint_at(c.joint_max - jn), joint_at(c.joint_max), joint_at(c.joint_max + eps),
        Fault::kJointAngleLimit},
@@ -494,11 +557,9 @@ MJC_VECTOR_TEST(Supervisor, ThresholdsExactlyAtTheLimitPassOneLsbBeyondFaults) {
        torque_at(c.torque_max + te), Fault::kTorqueLimit},
       {torque_at(-c.torque_max + Torque::FromDouble(0.01)), torque_at(-c.torque_max),
        torque_at(-c.torque_max - te), Fault::kTorqueLimit},
-      {velocity_at(c.velocity_max - AngularVelocity::FromDouble(0.01)),
-       velocity_at(c.velocity_max), velocity_at(c.velocity_max + ve),
+      {travel_of(travel_max - jn), travel_of(travel_max), travel_of(travel_max + eps),
        Fault::kVelocityLimit},
-      {velocity_at(-c.velocity_max + AngularVelocity::FromDouble(0.01)),
-       velocity_at(-c.velocity_max), velocity_at(-c.velocity_max - ve),
+      {travel_of(-travel_max + jn), travel_of(-travel_max), travel_of(-travel_max - eps),
        Fault::kVelocityLimit},
   };
   for (const Edge& e : edges) {
@@ -602,7 +663,7 @@ MJC_VECTOR_TEST(Supervisor, SimultaneousCausesReportTheFirstInRangeOrder) {
         in.torque = Rest().torque;
         break;
       case Fault::kVelocityLimit:
-        in.joint_velocity = AngularVelocity{};
+        in.joint_travel = Angle{};
         break;
       case Fault::kTickOverrun:
         in.tick_overrun = false;
@@ -652,7 +713,12 @@ MJC_VECTOR_TEST(Supervisor, HealthySlowSinusoidWithSlackRaisesNothing) {
 
   Rig rig;
   const SupervisorConfig& c = rig.config;
-  double joint = 0.0, last_joint = 0.0;
+  double joint = 0.0;
+  // θ_j of the last kSpanTicks ticks, for the travel over the span (the joint rests at
+  // 0 before the run, as a board's ring starts full of its first reading).
+  // Static: 4 KB is more than the Cortex-M4 test's stack should carry.
+  static double history[kSpanTicks];
+  for (double& h : history) h = 0.0;
   int faults = 0;
   // What the scenario puts next to each threshold, from the samples themselves.
   FrozenCounter frozen;
@@ -668,10 +734,11 @@ MJC_VECTOR_TEST(Supervisor, HealthySlowSinusoidWithSlackRaisesNothing) {
     if (cable - joint < -kSlack) joint = cable + kSlack;
     const double torque = 0.15 * (sin_wt * ch + cos_wt * sh);
     const double motor = cable + torque * (1.0 / kStiffness);
-    const double velocity = t == 0 ? 0.0 : (joint - last_joint) * (1.0 / kDt);
-    last_joint = joint;
-    const SupervisorInput in =
-        Sample(joint, motor, torque, velocity, 0.55 + 0.4 * sin_wt * cos_wt);
+    SupervisorInput in = Sample(joint, motor, torque, 0.0, 0.55 + 0.4 * sin_wt * cos_wt);
+    double& span_ago = history[static_cast<std::uint32_t>(t) % kSpanTicks];
+    in.joint_travel = in.joint - Angle::Quantize(span_ago);
+    span_ago =
+        static_cast<double>(RoundToInt(joint * kJointCountsPerRad)) * kJointCountRad;
 
     // Exercise
     if (rig.Check(in) != Fault::kNone) ++faults;
@@ -685,9 +752,9 @@ MJC_VECTOR_TEST(Supervisor, HealthySlowSinusoidWithSlackRaisesNothing) {
     const Angle step = mjc::Abs(in.joint - previous_joint);
     if (t > 0 && step > largest_step) largest_step = step;
     previous_joint = in.joint;
-    if (mjc::Abs(in.joint_velocity) > peak_velocity) {
-      peak_velocity = mjc::Abs(in.joint_velocity);
-    }
+    const AngularVelocity mean =
+        AngularVelocity::Quantize(in.joint_travel.ToDouble() / kSpanS);
+    if (mjc::Abs(mean) > peak_velocity) peak_velocity = mjc::Abs(mean);
     if (mjc::Abs(in.torque) > peak_torque) peak_torque = mjc::Abs(in.torque);
 
     // Advance the phase by one tick.

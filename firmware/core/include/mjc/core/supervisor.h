@@ -48,8 +48,9 @@ struct SupervisorConfig {
   Angle joint_max = Angle::FromDouble(1.6);
   Angle motor_min = Angle::FromDouble(-2.0);  // motor-pulley rad
   Angle motor_max = Angle::FromDouble(2.0);
-  Torque torque_max = Torque::FromDouble(1.0);                      // |τ|, N·m
-  AngularVelocity velocity_max = AngularVelocity::FromDouble(5.0);  // |θ̇_j|, rad/s
+  Torque torque_max = Torque::FromDouble(1.0);  // |τ|, N·m
+  // The joint's mean speed over the supervisor's velocity span (SetVelocitySpan), rad/s.
+  AngularVelocity velocity_max = AngularVelocity::FromDouble(5.0);
   // Largest plausible joint step in one tick: 0.01 rad per 100 µs is 100 rad/s, twenty
   // times the velocity limit; a bigger step is a corrupted reading.
   Angle joint_jump_max = Angle::FromDouble(0.01);
@@ -95,7 +96,9 @@ struct SupervisorInput {
   std::int64_t motor_count = 0;   // extended quadrature count
   Angle motor;                    // θ_m
   Torque torque;                  // SEA torque τ
-  AngularVelocity joint_velocity;
+  // θ_j − θ_j of the velocity span's ticks before (the last good readings at each): the
+  // velocity limit judges the mean speed it implies (Supervisor::SetVelocitySpan).
+  Angle joint_travel;
   Duty applied_duty;  // the duty applied over the previous tick
   Angle motor_error;  // the position loop's setpoint − θ_m behind that duty
   bool tick_overrun = false;
@@ -119,8 +122,20 @@ class Supervisor {
     void Clear() { *this = State{}; }
   };
 
+  // The velocity limit stays at "any motion" (travel_max 0, which trips on the first
+  // tick the joint moves) until SetVelocitySpan: forgetting it stops the motor rather
+  // than leaving the limit unchecked.
   Supervisor(const SupervisorConfig* config, State* state)
       : config_(config), state_(state) {}
+
+  // The velocity limit judges the joint's mean speed over the last `span_ticks` ticks,
+  // |θ_j(n) − θ_j(n − span)| · tick_hz / span > velocity_max: a difference of two
+  // readings, with no model and no filter, whose instant is span/2 ticks old. The
+  // threshold on the travel, velocity_max · span / tick_hz, is taken here once; as
+  // floor(v · 2^4 · span / tick_hz) in Angle LSBs (v in AngularVelocity LSBs) the
+  // integer test |travel| > threshold is the exact rational one. Call after every
+  // change of velocity_max, the span or the tick rate. span_ticks ≥ 1, tick_hz > 0.
+  void SetVelocitySpan(std::uint32_t span_ticks, std::uint32_t tick_hz);
 
   // Runs every check; latches and returns the first fault found (checked in the order
   // of the enum's ranges: sensors, limits, timing). Returns kNone while healthy, and
@@ -145,6 +160,7 @@ class Supervisor {
 
   const SupervisorConfig* config_;
   State* state_;
+  Angle travel_max_;  // SetVelocitySpan
 };
 
 template <bool kWithHistory>
@@ -164,7 +180,7 @@ template <bool kWithHistory>
   if (in.joint < c.joint_min || in.joint > c.joint_max) return Fault::kJointAngleLimit;
   if (in.motor < c.motor_min || in.motor > c.motor_max) return Fault::kMotorAngleLimit;
   if (Abs(in.torque) > c.torque_max) return Fault::kTorqueLimit;
-  if (Abs(in.joint_velocity) > c.velocity_max) return Fault::kVelocityLimit;
+  if (Abs(in.joint_travel) > travel_max_) return Fault::kVelocityLimit;
   if (in.tick_overrun) return Fault::kTickOverrun;
   if (in.external != Fault::kNone) return in.external;
   return Fault::kNone;
