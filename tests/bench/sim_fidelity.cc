@@ -20,6 +20,9 @@
 //   sim_realtime_factor      simulated seconds per wall second, one joint, one core;
 //                            the note gives it per second of this process's CPU time
 //                            too, which other jobs on a shared machine do not dilute
+//   sim_tick_ns              CPU time per simulated control tick, everything included
+//                            (board, plant, bus, host library): the budget
+//                            scripts/sim-profile splits by layer
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -106,5 +109,9 @@ int main() {
   const double simulated_s = board.plant().truth().time_s;
   std::printf("sim_realtime_factor: %.0f x (%.0f x per CPU second)\n", simulated_s / wall,
               simulated_s / cpu);
+  const double ticks = simulated_s * tick.config().tick_hz;
+  std::printf(
+      "sim_tick_ns: %.0f ns (CPU time per simulated tick of %.0f us, %.0f ticks)\n",
+      1e9 * cpu / ticks, 1e6 / tick.config().tick_hz, ticks);
   return 0;
 }

@@ -226,8 +226,8 @@ TrialOutcome RunTrial(BusBoard& bus, const SineConfig& sine, bool keep_trace,
     const std::size_t i = truth_power.size();
     truth_energy.push_back(energy_before);
     truth_power.push_back(power_before);
-    // The board's power refers to the instant `delay` ticks back.
-    board_power.resize(truth_power.size(), 0.0);
+    // The board's power refers to the instant `delay` ticks back (0 until known).
+    board_power.push_back(0.0);
     if (r.telemetry.tick >= base + delay) {
       board_power[r.telemetry.tick - delay - base] = r.telemetry.power.ToDouble();
     }
