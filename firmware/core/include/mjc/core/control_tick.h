@@ -11,7 +11,8 @@
 //     τ, θ_j and the trajectory segment are delayed by the same L, so P = τ·θ̇_j and its
 //     window refer to one instant
 //   4 P into the energy accumulator and the window tracker
-//   5 supervisor: any fault → bridge off now, latched
+//   5 supervisor: any fault → bridge off now, latched (the velocity limit on θ_j's
+//     travel over the last L ticks: the ring's oldest θ_j, not the aligned estimate)
 //   6 trajectory → setpoint (→ inverse backlash if enabled) → position loop → duty
 // Cost on Cortex-M4: `./bench` prints tick_instructions_cm4.
 #pragma once
