@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <numbers>
+#include <utility>
 
 #include "mjc/core/encoder.h"
 #include "mjc/core/quantities.h"
@@ -279,6 +280,13 @@ MJC_VECTOR_TEST(Supervisor, WithoutASpanAnyTravelTripsTheVelocityLimit) {
   VT_EXPECT_EQ(F(supervisor.Check(0, in)), F(Fault::kNone));
   in.joint_travel = Angle::Epsilon();
   VT_EXPECT_EQ(F(supervisor.Check(1, in)), F(Fault::kVelocityLimit));
+  // So does a span or a rate of zero, which has no mean to take.
+  for (const auto& [span, rate] : {std::pair{0u, 10000u}, std::pair{500u, 0u}}) {
+    Supervisor::State fresh;
+    Supervisor zero{&config, &fresh};
+    zero.SetVelocitySpan(span, rate);
+    VT_EXPECT_EQ(F(zero.Check(0, in)), F(Fault::kVelocityLimit));
+  }
 }
 
 MJC_VECTOR_TEST(SupervisorFault, TickOverrun) {

@@ -134,7 +134,8 @@ class Supervisor {
   // threshold on the travel, velocity_max · span / tick_hz, is taken here once; as
   // floor(v · 2^4 · span / tick_hz) in Angle LSBs (v in AngularVelocity LSBs) the
   // integer test |travel| > threshold is the exact rational one. Call after every
-  // change of velocity_max, the span or the tick rate. span_ticks ≥ 1, tick_hz > 0.
+  // change of velocity_max, the span or the tick rate. A zero span or rate leaves the
+  // limit at "any motion".
   void SetVelocitySpan(std::uint32_t span_ticks, std::uint32_t tick_hz);
 
   // Runs every check; latches and returns the first fault found (checked in the order
