@@ -19,15 +19,15 @@ SupervisorConfigError Validate(const SupervisorConfig& c) {
   return E::kOk;
 }
 
-void Supervisor::SetVelocitySpan(std::uint32_t span_ticks, std::uint32_t tick_hz) {
+void Supervisor::SetVelocitySpan(std::uint16_t span_ticks, std::uint32_t tick_hz) {
   constexpr int kShift = Angle::kFracBits - AngularVelocity::kFracBits;
   static_assert(kShift >= 0);
   if (span_ticks == 0 || tick_hz == 0) {  // no mean to take: any motion trips
     travel_max_ = Angle{};
     return;
   }
-  // v < 2^31 LSBs, span < 2^32: the product needs 64 bits before the division. A
-  // threshold beyond Angle's range is one no travel can pass.
+  // |v| < 2^31 LSBs, so v·2^4·span < 2^51 with span < 2^16: exact in 64 bits before
+  // the division. A threshold beyond Angle's range is one no travel can pass.
   const std::int64_t v = config_->velocity_max.raw();
   const std::int64_t travel = (v << kShift) * static_cast<std::int64_t>(span_ticks) /
                               static_cast<std::int64_t>(tick_hz);

@@ -38,7 +38,7 @@ constexpr double kJointCountsPerRad = 1.0 / kJointCountRad;
 constexpr double kMotorCountsPerRad = 1.0 / kMotorCountRad;
 // The velocity limit's span as the board sets it (the velocity estimator's delay at the
 // default 1001-tick window) and its tick rate: a mean speed v is a travel v·span/rate.
-constexpr std::uint32_t kSpanTicks = 500;
+constexpr std::uint16_t kSpanTicks = 500;
 constexpr std::uint32_t kTickHz = 10000;
 constexpr double kSpanS = static_cast<double>(kSpanTicks) / kTickHz;
 
@@ -237,7 +237,8 @@ MJC_VECTOR_TEST(SupervisorFault, VelocityLimit) {
 MJC_VECTOR_TEST(Supervisor, VelocitySpanThresholdIsTheExactMeanSpeed) {
   struct Case {
     double velocity_max;
-    std::uint32_t span, rate;
+    std::uint16_t span;
+    std::uint32_t rate;
   };
   const Case cases[] = {{5.0, 500, 10000},   {0.1, 500, 10000}, {3.3, 7, 3000},
                         {0.77, 1023, 20000}, {1.0, 16, 1000},   {2.9, 333, 9999}};
@@ -281,7 +282,8 @@ MJC_VECTOR_TEST(Supervisor, WithoutASpanAnyTravelTripsTheVelocityLimit) {
   in.joint_travel = Angle::Epsilon();
   VT_EXPECT_EQ(F(supervisor.Check(1, in)), F(Fault::kVelocityLimit));
   // So does a span or a rate of zero, which has no mean to take.
-  for (const auto& [span, rate] : {std::pair{0u, 10000u}, std::pair{500u, 0u}}) {
+  for (const auto& [span, rate] : {std::pair<std::uint16_t, std::uint32_t>{0, 10000},
+                                   std::pair<std::uint16_t, std::uint32_t>{500, 0}}) {
     Supervisor::State fresh;
     Supervisor zero{&config, &fresh};
     zero.SetVelocitySpan(span, rate);

@@ -136,7 +136,7 @@ class Supervisor {
   // integer test |travel| > threshold is the exact rational one. Call after every
   // change of velocity_max, the span or the tick rate. A zero span or rate leaves the
   // limit at "any motion".
-  void SetVelocitySpan(std::uint32_t span_ticks, std::uint32_t tick_hz);
+  void SetVelocitySpan(std::uint16_t span_ticks, std::uint32_t tick_hz);
 
   // Runs every check; latches and returns the first fault found (checked in the order
   // of the enum's ranges: sensors, limits, timing). Returns kNone while healthy, and
