@@ -150,11 +150,12 @@ InterfaceFit JointApp::SolveWindowFit(std::uint32_t start_tick) {
     return fit;
   }
   fit = SolveInterfaceFit(sums);
-  // A fit of a lossless or a stiff attachment can come out a little below zero (the
-  // window's noise): the model takes it as zero.
-  const AttachmentParams params{std::max(fit.stiffness, Stiffness{}),
-                                std::max(fit.damping, Damping{})};
-  if (trial && fit.valid()) attachments_.Push(params);
+  if (trial && fit.valid()) {
+    // A fit of a lossless or a stiff attachment can come out a little below zero (the
+    // window's noise): the model takes it as zero.
+    attachments_.Push(
+        {std::max(fit.stiffness, Stiffness{}), std::max(fit.damping, Damping{})});
+  }
   return fit;
 }
 

@@ -1,5 +1,7 @@
 #include "mjc/core/attachment_model.h"
 
+#include <algorithm>
+
 namespace mjc {
 
 namespace {
@@ -27,8 +29,7 @@ std::int32_t AttachmentModel::Target(std::int32_t beta, std::int32_t offset) con
 void AttachmentModel::SetCoefficients(std::int32_t beta, std::int32_t gain,
                                       std::int64_t offset) {
   const std::int64_t limit = kOffsetLimit.raw();
-  offset_ = static_cast<std::int32_t>(
-      offset > limit ? limit : (offset < -limit ? -limit : offset));
+  offset_ = static_cast<std::int32_t>(std::clamp(offset, -limit, limit));
   beta_ = beta;
   minus_gain_ = -gain;
   gain_beta_ = static_cast<std::int32_t>(MulQ30(gain, beta));

@@ -4,6 +4,13 @@ namespace mjc {
 
 namespace {
 
+// D = Σ (i − c)² = N(N² − 1)/12 over a window of N (odd) samples: below 2^30 for
+// N ≤ kMaxWindow.
+std::int64_t CentredSquares(std::uint16_t window) {
+  const std::int64_t n = window;
+  return n * (n * n - 1) / 12;
+}
+
 struct SlopeScale {
   std::int64_t multiplier = 0;
   int shift = 0;
@@ -15,9 +22,7 @@ struct SlopeScale {
 // The largest shift whose multiplier still fits in 30 bits (precision ≥ 2^-29); a zero
 // multiplier means the window is too short for this tick rate.
 SlopeScale ScaleFor(const VelocityEstimatorConfig& config) {
-  const auto n = static_cast<std::int64_t>(config.window);
-  const std::int64_t d = n * (n * n - 1) / 12;
-  const std::int64_t denominator = 128 * d;
+  const std::int64_t denominator = 128 * CentredSquares(config.window);
   SlopeScale best;
   for (int s = 32; s <= 62; ++s) {
     const std::int64_t f = config.tick_hz;
@@ -51,8 +56,7 @@ VelocityEstimatorError VelocityEstimator::Configure(
   if (error != VelocityEstimatorError::kOk) return error;
   const SlopeScale scale = ScaleFor(config);
   window_ = config.window;
-  const std::int64_t n = config.window;
-  d_ = static_cast<std::int32_t>(n * (n * n - 1) / 12);  // < 2^30 for n ≤ kMaxWindow
+  d_ = static_cast<std::int32_t>(CentredSquares(config.window));
   multiplier_ = static_cast<std::int32_t>(scale.multiplier);
   shift_ = scale.shift;
   Reset(Angle{});
