@@ -23,8 +23,9 @@ if(TARGET mjc_gpio)
 endif()
 
 if(TARGET mjc_plant)
-  # The plant is physics: it must not replay the firmware's application or talk CAN.
-  mjc_forbid_dependency(mjc_plant "^mjc_(app|protocol|host|sim_board|scenarios|hal)")
+  # The plant is physics: it must not replay the firmware (not even its core's
+  # algorithms or the sensor decoding it is tested against) or talk CAN.
+  mjc_forbid_dependency(mjc_plant "^mjc_(core|app|protocol|host|sim_board|scenarios|hal)")
 endif()
 
 if(TARGET mjc_g474_model)

@@ -7,13 +7,32 @@
 #include <stdexcept>
 #include <string>
 
-#include "mjc/core/encoder.h"
-
 namespace mjc::plant {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
+// The joint sensor's resolution: the AS5047P's 14-bit angle.
+constexpr double kJointCountsPerRev = 16384.0;
 constexpr double kJointCountsPerRad = kJointCountsPerRev / kTwoPi;
+
+// The joint sensor's SPI frame as the AS5047P datasheet gives it (ANGLECOM read): bits
+// 13..0 the angle, bit 14 EF (error flag), bit 15 PARD, the even parity of bits 14..0.
+// Written here from the datasheet rather than taken from the firmware's decoder, so the
+// board's decoding is checked against a sensor it does not share code with.
+constexpr std::uint16_t kFrameCountMask = 0x3FFFu;
+constexpr std::uint16_t kFrameErrorFlag = 0x4000u;
+constexpr std::uint16_t kFrameParity = 0x8000u;
+
+std::uint16_t SensorFrame(std::uint16_t count14, bool error_flag) {
+  auto low = static_cast<std::uint16_t>((count14 & kFrameCountMask) |
+                                        (error_flag ? kFrameErrorFlag : 0u));
+  unsigned ones = 0;
+  for (std::uint16_t bits = low; bits != 0;
+       bits = static_cast<std::uint16_t>(bits >> 1)) {
+    ones += bits & 1u;
+  }
+  return static_cast<std::uint16_t>(low | ((ones & 1u) != 0 ? kFrameParity : 0u));
+}
 // Longest step a single Step()/StepPrescribedMotor() call accepts, s.
 constexpr double kMaxCallStep_s = 0.01;
 
@@ -719,13 +738,13 @@ std::uint16_t Plant::JointFrame() {
   FaultSlot& jump = faults_[static_cast<int>(SensorFaultKind::kJointJump)];
   const std::int32_t jump_counts = jump.jump_counts;
   if (ConsumeFault(&jump)) count += jump_counts;
-  const auto count14 = static_cast<std::uint16_t>(static_cast<std::uint64_t>(count) &
-                                                  kJointFrameCountMask);
+  const auto count14 =
+      static_cast<std::uint16_t>(static_cast<std::uint64_t>(count) & kFrameCountMask);
   const bool error_flag =
       ConsumeFault(&faults_[static_cast<int>(SensorFaultKind::kJointErrorFlag)]);
-  std::uint16_t frame = EncodeJointFrame(count14, error_flag);
+  std::uint16_t frame = SensorFrame(count14, error_flag);
   if (ConsumeFault(&faults_[static_cast<int>(SensorFaultKind::kJointParity)])) {
-    frame = static_cast<std::uint16_t>(frame ^ kJointFrameParityBit);
+    frame = static_cast<std::uint16_t>(frame ^ kFrameParity);
   }
   if (ConsumeFault(&faults_[static_cast<int>(SensorFaultKind::kJointStuck)])) {
     frame = stuck_joint_frame_;
@@ -753,10 +772,9 @@ void Plant::InjectFault(const SensorFault& fault) {
       const std::int64_t count =
           FloorToInt(x_(Index::kJointAngle) * kJointCountsPerRad + 0.5) +
           params_.sensors.joint_zero_count;
-      stuck_joint_frame_ =
-          EncodeJointFrame(static_cast<std::uint16_t>(static_cast<std::uint64_t>(count) &
-                                                      kJointFrameCountMask),
-                           false);
+      stuck_joint_frame_ = SensorFrame(
+          static_cast<std::uint16_t>(static_cast<std::uint64_t>(count) & kFrameCountMask),
+          false);
     }
   }
 }
