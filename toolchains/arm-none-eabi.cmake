@@ -1,5 +1,5 @@
 # Cross compilers for the Cortex-M targets. This file picks compilers and nothing else:
-# CPU and ABI flags live on the mjc_cortex_m4 INTERFACE target (cmake/MjcTarget.cmake),
+# CPU and ABI flags live on the mjc_cortex_m4 INTERFACE target (cmake/MjcCortexM4.cmake),
 # so every target states what it is built for.
 set(CMAKE_SYSTEM_NAME Generic)
 set(CMAKE_SYSTEM_PROCESSOR arm)

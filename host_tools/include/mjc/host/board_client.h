@@ -2,7 +2,7 @@
 
 // One joint board seen from the host over a CanLink: commands with their answers,
 // trial configuration, and what the board reports (heartbeat, telemetry, window
-// summaries reassembled from their five frames, faults), and the host's heartbeat that
+// summaries reassembled from their seven frames, faults), and the host's heartbeat that
 // lets the board stop a motion when this host goes away. Used by mjc trial, calibrate,
 // cal and monitor.
 #include <atomic>

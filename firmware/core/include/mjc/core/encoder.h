@@ -38,10 +38,11 @@ constexpr std::int64_t MaxTrackableMotorRpm(std::int32_t counts_per_rev,
   return std::int64_t{kMaxQuadratureStepCounts} * sample_hz * 60 / counts_per_rev;
 }
 
-// The design point (docs/DESIGN.md §1-2: 10 kHz tick; a 512-line, 2048-edge encoder): the
-// extension tracks up to 9.6 million motor rpm (96,000 pulley rpm at 100:1), over 300
-// times what any brushed DC motor of this size reaches (≤ 30,000 rpm, i.e. ≤ 103 counts
-// a tick). In practice the timer's input filter, not the extension, limits the speed.
+// The design point (a 10 kHz tick, docs/DESIGN.md §2; the 512-line, 2048-edge encoder of
+// the shipped motor, sim_host/params/default.json's motor_counts_per_rev): the extension
+// tracks up to 9.6 million motor rpm (96,000 pulley rpm at 100:1), over 300 times what
+// any brushed DC motor of this size reaches (≤ 30,000 rpm, i.e. ≤ 103 counts a tick). In
+// practice the timer's input filter, not the extension, limits the speed.
 static_assert(MaxTrackableMotorRpm(2048, 10000) == 9'599'707);
 static_assert(MaxTrackableMotorRpm(2048, 10000) > 300 * 30'000);
 
