@@ -388,6 +388,16 @@ void VirtualBoard::FirmwareThread() {
                                       std::lround(timeout * config_.speed), 1L, 60000L));
   for (;;) {
     try {
+      if (chip_->boot_source() != g474model::BootSource::kMainFlash) {
+        // The option bytes and PB8 chose other code (RM0440 §2.6): none of ours runs,
+        // and ST's ROM bootloader has no FDCAN on the G47x: the board is silent until
+        // a reset boots it elsewhere.
+        Say("boots %s (FLASH_OPTR 0x%08X): no image runs, silent on the bus",
+            g474model::BootSourceName(chip_->boot_source()),
+            chip_->flash().options().loaded());
+        chip_->RunWithoutImage();
+        break;
+      }
       // The image's entry after its memory initialisation (startup.cc).
       board::BringUp();
       board::Run(options);
