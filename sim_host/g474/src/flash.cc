@@ -157,8 +157,8 @@ void Flash::Interrupt() {
 }
 
 bool Flash::PowerLost() {
-  if (options_.PowerLost()) return true;
-  if (op_.kind == OpKind::kNone) return false;
+  const bool options = options_.PowerLost();
+  if (op_.kind == OpKind::kNone) return options;
   Interrupt();
   return true;
 }
@@ -319,7 +319,7 @@ bool Flash::Write(const Access& a) {
         log_->Report(now_, "FLASH", "FSTPG: fast programming is not modelled");
       }
       if (!start) return true;
-      if (busy()) {
+      if (busy() || options_.busy()) {
         log_->Report(now_, "FLASH", "CR.STRT while BSY = 1: ignored");
         return true;
       }

@@ -86,17 +86,22 @@ Picoseconds BusTime(const g474model::CanBusFrame& f, double nominal, double data
 
 VirtualBoard::VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link)
     : config_(config), link_(link) {
-  // The FLASH model keeps a file of exactly its array's size (and leaves any other
-  // alone): a file it cannot keep is refused here, rather than a board that forgets.
+  // The FLASH model keeps a file of exactly its array's size, or the array and its
+  // option bytes' block (and leaves any other alone): a file it cannot keep is refused
+  // here, rather than a board that forgets.
   if (!config_.flash_path.empty() && std::filesystem::exists(config_.flash_path)) {
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(config_.flash_path, error);
-    if (error || size != g474model::Flash::kSize) {
+    if (error || (size != g474model::Flash::kSize &&
+                  size != g474model::Flash::kSize + g474model::OptionBytes::kFileBytes)) {
       throw std::runtime_error(
           config_.flash_path + ": " +
           (error ? error.message()
                  : std::to_string(size) + " bytes, not a G474 flash file (" +
-                       std::to_string(g474model::Flash::kSize) + " bytes)") +
+                       std::to_string(g474model::Flash::kSize) + " bytes, or " +
+                       std::to_string(g474model::Flash::kSize +
+                                      g474model::OptionBytes::kFileBytes) +
+                       " with its option bytes)") +
           "; left as it is");
     }
   }
