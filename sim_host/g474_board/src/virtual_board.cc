@@ -108,6 +108,7 @@ VirtualBoard::VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link
   g474model::ChipConfig chip;
   chip.rcc.hse_hz = kCrystalHz;
   chip.flash.path = config_.flash_path;
+  chip.boot0 = config_.boot0;
   std::copy(config_.unique_id.begin(), config_.unique_id.end(), chip.flash.uid);
   chip_ = std::make_unique<g474model::VirtualChip>(chip);
   if (!config_.flash_path.empty() && !chip_->flash().mirrored()) {
