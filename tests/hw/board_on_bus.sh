@@ -8,7 +8,10 @@
 #
 # usage: board_on_bus.sh <path of mjc>
 # environment: MJC_HW_CAN (required), MJC_HW_NODE (default 1), MJC_HW_BUILD (the build
-# the board should run, e.g. the short commit of the image flashed; unchecked if unset)
+# the board should run, e.g. the short commit of the image flashed; unchecked if unset),
+# MJC_HW_PROBE=1 when an ST-Link is on the board's SWD connector: the chip's option
+# bytes, clock source, reset flags and FDCAN transmitter delay are then read through
+# OpenOCD, without halting the core (chip_registers.sh)
 #
 # The kernel layer runs this same script against a simulated board on vcan0
 # (kernel_hw_script), so what a lab runs on its first board has been run before.
@@ -53,6 +56,30 @@ if [ -n "${MJC_HW_BUILD:-}" ]; then
   check "  the build flashed ($MJC_HW_BUILD)" grep -q "\"build\": *\"$MJC_HW_BUILD" <<<"$line"
 fi
 check "  not faulted" grep -q '"fault": *null' <<<"$line"
+cause=$(sed -n 's/.*"reset_cause": *"\([^"]*\)".*/\1/p' <<<"$line")
+echo "  last reset: ${cause:-not reported}"
+check "  with a known reset cause" test -n "$cause" -a "$cause" != unknown
+
+# The chip through the probe (docs/BRINGUP.md): the option bytes first-flash set, the
+# clock the image runs on, the reset flags, the transceiver's loop delay as FDCAN1
+# measured it on the node's own fast data phases.
+if [ "${MJC_HW_PROBE:-0}" = 1 ]; then
+  registers=$(dirname "$0")/chip_registers.sh
+  check "registers read through the probe (openocd mdw, core running)" \
+    "$registers" read "$work/registers.txt"
+  for what in optr clock reset tdc; do
+    "$registers" "$what" "$work/registers.txt" | sed 's/^/  /'
+  done
+  check "  FLASH_OPTR: nSWBOOT0 = 0, nBOOT0 = 1, DBANK = 1" \
+    "$registers" optr "$work/registers.txt"
+  check "  clock: SYSCLK from the PLL, the PLL from the HSE (HSERDY)" \
+    "$registers" clock "$work/registers.txt"
+  check "  RCC_CSR read" "$registers" reset "$work/registers.txt"
+  check "  FDCAN1 measured a transmitter delay (0 < TDCV - TDCO, TDCV < 127)" \
+    "$registers" tdc "$work/registers.txt"
+else
+  echo "registers through a probe: skipped (MJC_HW_PROBE=1 with an ST-Link on SWD)"
+fi
 
 # A short calibration: sweep, fit, upload, and the board keeping it. 1.5 Hz: at 2 Hz the
 # 30° sweep moves the bare joint at up to 5.2 rad/s, past the board's 5 rad/s velocity

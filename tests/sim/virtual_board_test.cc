@@ -165,6 +165,23 @@ TEST(VirtualBoard, BootsAsOnTheChip) {
   EXPECT_EQ(board.Summary().resets, 0);
 }
 
+// PB8 pulled up and the factory option bytes (nSWBOOT0 = 1): the chip boots its ROM
+// bootloader, which has no FDCAN on the G47x. No firmware runs, nothing reaches the bus.
+TEST(VirtualBoard, APulledUpBoot0PinWithFactoryOptionBytesIsSilent) {
+  auto bus = host::InProcessBus::Create();
+  auto board_link = bus->Connect();
+  auto host_link = bus->Connect();
+  g474board::VirtualBoardConfig config = Config(plant::LoadPlantParams("default"));
+  config.boot0 = g474model::Boot0Pin::kPulledUp;
+  g474board::VirtualBoard board(config, board_link.get());
+  board.RunUntil(0.5);
+  EXPECT_GE(board.now_s(), 0.5);
+  EXPECT_EQ(board.chip().boot_source(), g474model::BootSource::kSystemMemory);
+  EXPECT_EQ(board.firmware(), nullptr) << "the firmware ran";
+  EXPECT_TRUE(Drain(*host_link).empty()) << "the board was heard";
+  board.Stop();
+}
+
 TEST(VirtualBoard, ConfirmsAHealthyStartAfterTwoSeconds) {
   // Two unconfirmed starts of this image so far, as the bootloader counts them.
   constexpr std::uint32_t kImageCrc = 0x5EED1234u;

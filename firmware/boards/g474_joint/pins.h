@@ -11,10 +11,11 @@
 //   PC6  AF2 TIM3_CH1      PC7  AF2 TIM3_CH2
 //   PA11 AF9 FDCAN1_RX     PA12 AF9 FDCAN1_TX
 // Pins kept free on purpose: PA13/PA14 (SWD), PB3 (SWO), PB8 (BOOT0: a pulled signal
-// there would select the ROM bootloader at reset with the factory option bytes, see the
-// chip notes), PB4/PB6 (UCPD1's dead-battery pull-downs after reset), PF0/PF1 (the 24 MHz
-// crystal, taken by the HSE when HSEON is set), PB12 (TIM1_BKIN, AF6: reserved for the
-// gate driver's fault output as a hardware break input).
+// there would select the ROM bootloader at reset with the factory option bytes; the
+// board pulls it down and scripts/first-flash sets nSWBOOT0 = 0, docs/BRINGUP.md),
+// PB4/PB6 (UCPD1's dead-battery pull-downs after reset), PF0/PF1 (the 24 MHz crystal,
+// taken by the HSE when HSEON is set), PB12 (TIM1_BKIN, AF6: reserved for the gate
+// driver's fault output as a hardware break input).
 #pragma once
 
 #include "hal/stm32g4/gpio.h"

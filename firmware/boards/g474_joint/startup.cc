@@ -14,7 +14,8 @@
 // enable line low and TIM1's main output off (its idle state: both low sides on, so the
 // motor is braked, not left to run on its last duty), the exception number kept in a
 // RAM word that survives the reset, and a system reset (AIRCR.SYSRESETREQ). The reset
-// puts every pin back to input, where the board's pull-downs hold the bridge off; the
+// puts the pins back to analog mode (no output driver, no pull: GPIOx_MODER resets to
+// all ones on most pins), where the board's pull-downs hold the bridge off; the
 // next boot reports the crash (Startup().crashed). If even that fails (a fault while
 // stacking onto an overflowed interrupt stack locks the core up), the watchdog resets
 // the chip within 100 ms.

@@ -35,7 +35,10 @@ KeyStep NextKey(int* stage, std::uint32_t value, std::uint32_t first,
 }  // namespace
 
 Flash::Flash(ViolationLog* log, FlashConfig config)
-    : log_(log), config_(std::move(config)), memory_(kSize, 0xFF) {
+    : log_(log),
+      config_(std::move(config)),
+      memory_(kSize, 0xFF),
+      options_(log, config_.option_program_time) {
   if (!config_.path.empty()) {
     bool keep = true, fresh = true;
     std::ifstream in(config_.path, std::ios::binary);
@@ -43,11 +46,18 @@ Flash::Flash(ViolationLog* log, FlashConfig config)
       std::vector<std::uint8_t> data((std::istreambuf_iterator<char>(in)),
                                      std::istreambuf_iterator<char>());
       fresh = false;
-      keep = data.size() == memory_.size();
+      // The array, then the option bytes' block (a file without one: factory options).
+      keep = data.size() == memory_.size() ||
+             data.size() == memory_.size() + OptionBytes::kFileBytes;
+      if (keep && data.size() > memory_.size()) {
+        options_.Restore(&data[kSize], OptionBytes::kFileBytes);
+        data.resize(kSize);
+      }
       if (keep) memory_ = std::move(data);
     }
     if (keep) file_ = ::open(config_.path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fresh) Save(0, kSize);
+    options_.Persist(file_, kSize);
   }
   Reset();
 }
@@ -73,7 +83,8 @@ void Flash::Reset() {
   acr_ = 0x00040601u;
   sr_ = 0;
   cr_ = kLock | kOptlock;
-  optr_ = 0xFFEFF8AAu;  // factory option bytes (RM0440 FLASH_OPTR reset value): DBANK = 1
+  options_.Reset();  // FLASH_OPTR: the option bytes loaded last
+  if (options_.load_error()) sr_ |= kOptverr;
   // WRP areas as the factory option bytes leave them: start > end, no protection.
   for (auto& w : wrp_) w = 0x0000007Fu;
   key_stage_ = optkey_stage_ = 0;
@@ -146,13 +157,15 @@ void Flash::Interrupt() {
 }
 
 bool Flash::PowerLost() {
-  if (op_.kind == OpKind::kNone) return false;
+  const bool options = options_.PowerLost();
+  if (op_.kind == OpKind::kNone) return options;
   Interrupt();
   return true;
 }
 
 void Flash::Advance(Picoseconds now) {
   now_ = now;
+  options_.Advance(now);
   if (op_.kind == OpKind::kNone) return;
   if (now >= op_.cut_at) {
     Interrupt();
@@ -164,7 +177,7 @@ void Flash::Advance(Picoseconds now) {
 }
 
 Picoseconds Flash::NextEvent() const {
-  if (op_.kind == OpKind::kNone) return kNever;
+  if (op_.kind == OpKind::kNone) return options_.NextEvent();
   return op_.cut_at < op_.end ? op_.cut_at : op_.end;
 }
 
@@ -180,7 +193,7 @@ RegisterTable<Flash> Flash::Registers() {
       R::ClearByWriting1(0x10, &Flash::sr_, kSrW1c),
       R::ReadWrite(0x14, &Flash::cr_),
       R::Fixed(0x18),  // ECCR: no ECC errors modelled
-      R::ReadOnly(0x20, &Flash::optr_),
+      // 0x20 FLASH_OPTR: OptionBytes (see Read and Write).
       R::Fixed(0x24, 0xFFFF0000u),
       R::Fixed(0x28),
       R::Fixed(0x44, 0xFFFF0000u),
@@ -208,7 +221,15 @@ const std::uint32_t* Flash::Wrp(std::uint32_t offset) const {
 
 bool Flash::Read(const Access& a, std::uint32_t* v) {
   if (a.offset == 0x10) {
-    *v = sr_ | (busy() ? kBsy : 0);
+    *v = sr_ | (busy() || options_.busy() ? kBsy : 0);
+    return true;
+  }
+  if (a.offset == OptionBytes::kOffset) {
+    *v = options_.reg();
+    return true;
+  }
+  if (a.offset == 0x14 && options_.busy()) {
+    *v = cr_ | kOptstrt;  // OPTSTRT reads 1 until BSY clears
     return true;
   }
   if (const std::uint32_t* wrp = Wrp(a.offset)) {
@@ -287,18 +308,18 @@ bool Flash::Write(const Access& a) {
       cr_ = next & ~kStart;
       if (!(cr_ & kPg)) have_first_ = false;
       if (next & kOptstrt) {
-        log_->Report(now_, "FLASH", "OPTSTRT: option-byte programming is not modelled");
         cr_ &= ~kOptstrt;
+        options_.Start((cr_ & kOptlock) != 0, busy(), now_);
       }
       if (next & kOblLaunch) {
-        log_->Report(now_, "FLASH", "OBL_LAUNCH: option-byte loading is not modelled");
         cr_ &= ~kOblLaunch;
+        options_.Launch((cr_ & kOptlock) != 0, now_);
       }
       if (next & kFstpg) {
         log_->Report(now_, "FLASH", "FSTPG: fast programming is not modelled");
       }
       if (!start) return true;
-      if (busy()) {
+      if (busy() || options_.busy()) {
         log_->Report(now_, "FLASH", "CR.STRT while BSY = 1: ignored");
         return true;
       }
@@ -343,8 +364,8 @@ bool Flash::Write(const Access& a) {
       log_->Report(now_, "FLASH", "CR.STRT with neither PER nor MER1/MER2: nothing done");
       return true;
     }
-    case 0x20:
-      log_->Report(now_, "FLASH", "FLASH_OPTR written: option bytes are not modelled");
+    case OptionBytes::kOffset:
+      options_.Write(a, (cr_ & kOptlock) != 0, now_);
       return true;
     case 0x24:
     case 0x28:

@@ -17,6 +17,8 @@ const char* ResetCauseName(ResetCause c) {
       return "independent watchdog";
     case ResetCause::kPowerCut:
       return "power cut";
+    case ResetCause::kOptionLoad:
+      return "option-byte loading (FLASH_CR.OBL_LAUNCH)";
   }
   return "?";
 }
@@ -47,6 +49,8 @@ VirtualChip::VirtualChip(ChipConfig config)
   iwdg_.SetExpiryHook([this] { reset_pending_ = ResetCause::kIwdg; });
   cortex_.SetResetRequestHook([this] { reset_pending_ = ResetCause::kSoftware; });
   flash_.SetPowerCutHook([this] { reset_pending_ = ResetCause::kPowerCut; });
+  flash_.options().SetLaunchHook([this] { reset_pending_ = ResetCause::kOptionLoad; });
+  boot0_rng_.seed(config_.boot0_seed);
   for (auto& g : gpio_) {
     g->SetAfDriveSource([this](PinId p) { return AfDrive(p); });
     g->SetLevelHook([this](PinId p, bool level) { OnPinLevel(p, level); });
@@ -70,6 +74,8 @@ VirtualChip::VirtualChip(ChipConfig config)
   });
   reset_handler_ = [](ResetCause c) { throw ChipReset{c}; };
   UpdateGates();
+  SetBoot0Pin(config_.boot0);
+  SampleBoot();
 }
 
 VirtualChip::~VirtualChip() = default;
@@ -673,7 +679,13 @@ void VirtualChip::DoReset(ResetCause cause) {
     rcc_.Reset();
     // Internal resets drive NRST low too, so PINRSTF is set with the cause's flag.
     rcc_.SetResetFlags(csr::kPinrstf |
-                       (cause == ResetCause::kIwdg ? csr::kIwdgrstf : csr::kSftrstf));
+                       (cause == ResetCause::kIwdg         ? csr::kIwdgrstf
+                        : cause == ResetCause::kOptionLoad ? csr::kOblrstf
+                                                           : csr::kSftrstf));
+  }
+  // The option-byte loader runs at a power-on and at OBL_LAUNCH, not at other resets.
+  if (cause == ResetCause::kPowerCut || cause == ResetCause::kOptionLoad) {
+    flash_.options().Load(now_);
   }
   pwr_.Reset();
   flash_.Reset();
@@ -688,8 +700,45 @@ void VirtualChip::DoReset(ResetCause cause) {
   active_stack_.clear();
   primask_ = false;
   cycle_remainder_ = 0;
+  SampleBoot();
   AdvanceAll();
   if (reset_handler_) reset_handler_(cause);
+}
+
+void VirtualChip::SetBoot0Pin(Boot0Pin pin) {
+  config_.boot0 = pin;
+  gpio('B').DriveInput(8, pin == Boot0Pin::kFloating
+                              ? std::nullopt
+                              : std::optional<bool>(pin == Boot0Pin::kPulledUp));
+}
+
+void VirtualChip::SampleBoot() {
+  const std::uint32_t optr = flash_.options().loaded();
+  bool pin = config_.boot0 == Boot0Pin::kPulledUp;
+  if (config_.boot0 == Boot0Pin::kFloating) {
+    pin = (boot0_rng_() & 1u) != 0;
+    if ((optr & OptionBytes::kNSwBoot0) != 0) {
+      log_.Report(now_, "BOOT",
+                  "BOOT0 sampled from a floating PB8 (nSWBOOT0 = 1): the boot source is "
+                  "chance (RM0440 §2.6)");
+    }
+  }
+  boot_ = BootFrom(optr, pin);
+}
+
+void VirtualChip::RunWithoutImage() {
+  for (;;) {
+    if (deadline_ <= now_) AdvanceAll();
+    Picoseconds next = events_.empty() ? kNever : events_.begin()->first;
+    for (const Picoseconds e : next_) {
+      if (e > now_ && e < next) next = e;
+    }
+    if (next == kNever) {
+      if (limit_ != kNever) Sync(limit_ + 1);
+      return;
+    }
+    Sync(next);
+  }
 }
 
 // ── World ─────────────────────────────────────────────────────────────────────────

@@ -86,23 +86,29 @@ Picoseconds BusTime(const g474model::CanBusFrame& f, double nominal, double data
 
 VirtualBoard::VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link)
     : config_(config), link_(link) {
-  // The FLASH model keeps a file of exactly its array's size (and leaves any other
-  // alone): a file it cannot keep is refused here, rather than a board that forgets.
+  // The FLASH model keeps a file of exactly its array's size, or the array and its
+  // option bytes' block (and leaves any other alone): a file it cannot keep is refused
+  // here, rather than a board that forgets.
   if (!config_.flash_path.empty() && std::filesystem::exists(config_.flash_path)) {
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(config_.flash_path, error);
-    if (error || size != g474model::Flash::kSize) {
+    if (error || (size != g474model::Flash::kSize &&
+                  size != g474model::Flash::kSize + g474model::OptionBytes::kFileBytes)) {
       throw std::runtime_error(
           config_.flash_path + ": " +
           (error ? error.message()
                  : std::to_string(size) + " bytes, not a G474 flash file (" +
-                       std::to_string(g474model::Flash::kSize) + " bytes)") +
+                       std::to_string(g474model::Flash::kSize) + " bytes, or " +
+                       std::to_string(g474model::Flash::kSize +
+                                      g474model::OptionBytes::kFileBytes) +
+                       " with its option bytes)") +
           "; left as it is");
     }
   }
   g474model::ChipConfig chip;
   chip.rcc.hse_hz = kCrystalHz;
   chip.flash.path = config_.flash_path;
+  chip.boot0 = config_.boot0;
   std::copy(config_.unique_id.begin(), config_.unique_id.end(), chip.flash.uid);
   chip_ = std::make_unique<g474model::VirtualChip>(chip);
   if (!config_.flash_path.empty() && !chip_->flash().mirrored()) {
@@ -388,6 +394,16 @@ void VirtualBoard::FirmwareThread() {
                                       std::lround(timeout * config_.speed), 1L, 60000L));
   for (;;) {
     try {
+      if (chip_->boot_source() != g474model::BootSource::kMainFlash) {
+        // The option bytes and PB8 chose other code (RM0440 §2.6): none of ours runs,
+        // and ST's ROM bootloader has no FDCAN on the G47x: the board is silent until
+        // a reset boots it elsewhere.
+        Say("boots %s (FLASH_OPTR 0x%08X): no image runs, silent on the bus",
+            g474model::BootSourceName(chip_->boot_source()),
+            chip_->flash().options().loaded());
+        chip_->RunWithoutImage();
+        break;
+      }
       // The image's entry after its memory initialisation (startup.cc).
       board::BringUp();
       board::Run(options);

@@ -171,9 +171,10 @@ TEST(G474Flash, ContentsPersistToAFile) {
     Unlock(c);
     Program(c, 0x0807F000, 0x0123456789ABCDEFull);
   }
-  // The file itself: the whole array, erased but for the double-word, little-endian.
+  // The file itself: the whole array, erased but for the double-word, little-endian,
+  // then the option bytes' 16-byte block.
   const std::vector<char> bytes = ReadFile(path);
-  ASSERT_EQ(bytes.size(), Flash::kSize);
+  ASSERT_EQ(bytes.size(), Flash::kSize + 16);
   const unsigned char want[8] = {0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23, 0x01};
   for (unsigned i = 0; i < 8; ++i) {
     EXPECT_EQ(static_cast<unsigned char>(bytes[0x7F000 + i]), want[i]) << i;

@@ -4,8 +4,9 @@
 // Timeout: 100 ms (LSI ≈ 32 kHz / 32 → 1 kHz, reload 99 → 100 counts). Long enough for
 // the slowest thing the main loop does between two refreshes — a calibration page
 // erase, ≤ 40 ms — with margin for the LSI's spread; short enough that a hung CPU (whose
-// PWM would keep running) is reset within 0.1 s, after which every pin is an input and
-// the board's pull-downs hold the bridge's enable line low. Once started the watchdog
+// PWM would keep running) is reset within 0.1 s, after which the pins are in analog mode
+// (no driver, no pull; GPIOx_MODER resets to all ones on most pins) and the board's
+// pull-downs hold the bridge's enable line low. Once started the watchdog
 // cannot be stopped except by a reset.
 #pragma once
 

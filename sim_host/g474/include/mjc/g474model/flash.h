@@ -7,7 +7,7 @@
 //    DCEN, ICRST/DCRST (only while the cache is off).
 //  - KEYR: KEY1 = 0x45670123 then KEY2 = 0xCDEF89AB clear CR.LOCK; any other value or
 //    order is a bus error and locks CR until the next reset (§5.3.5 "Flash memory
-//    unlock"). OPTKEYR likewise for OPTLOCK (option programming itself is not modelled).
+//    unlock"). OPTKEYR likewise for OPTLOCK.
 //  - SR: EOP (set at the end of an operation only when CR.EOPIE = 1), OPERR (with
 //    ERRIE), PROGERR, WRPERR, PGAERR, SIZERR, PGSERR, MISSERR, FASTERR, RDERR, OPTVERR,
 //    all write-1-to-clear; BSY.
@@ -31,9 +31,11 @@
 //    random bytes, an interrupted program a random mix of old and new bits, and the
 //    whole chip loses power (the owner restarts it). Optional persistence to a file.
 //
-// Not covered: option-byte programming and loading (OPTSTRT, OBL_LAUNCH), fast
-// programming (FSTPG), PCROP and the securable area, ECC errors, single-bank mode
-// (DBANK = 0), power-down modes, the OTP area.
+//  - Option bytes: FLASH_OPTR, OPTSTRT and OBL_LAUNCH through OptionBytes
+//    (option_bytes.h), its word kept after the array in the persistence file.
+//
+// Not covered: fast programming (FSTPG), PCROP and the securable area, ECC errors,
+// single-bank mode (DBANK = 0), power-down modes, the OTP area.
 #pragma once
 
 #include <cstdint>
@@ -43,6 +45,7 @@
 #include <vector>
 
 #include "mjc/g474model/common.h"
+#include "mjc/g474model/option_bytes.h"
 #include "mjc/g474model/register_table.h"
 
 namespace mjc::g474model {
@@ -51,12 +54,17 @@ struct FlashConfig {
   // Persistence file ("" = none): loaded when its size is the array's, and kept up to
   // date after every erase and program — the page or double-word it changed, one write
   // each, so a process killed at any moment leaves the file as the operations that had
-  // completed left it. A missing file is created erased; a file of another size is left
-  // untouched and not kept (the array starts erased).
+  // completed left it. After the array, a 16-byte block keeps the option bytes
+  // (OptionBytes); a file of the array alone is taken with factory options and gets the
+  // block. A missing file is created erased; a file of another size is left untouched
+  // and not kept (the array starts erased).
   std::string path;
   Picoseconds program_time = Microseconds(81.7);
   Picoseconds page_erase_time = Microseconds(22020);
   Picoseconds mass_erase_time = Microseconds(22130);
+  // OPTSTRT to BSY cleared: the option page's erase and its words programmed (assumed
+  // a page erase and eight double words; DS12288 gives no separate figure we hold).
+  Picoseconds option_program_time = Microseconds(22020 + 8 * 81.7);
   std::uint32_t uid[3] = {0x00400031u, 0x4E4B5003u, 0x20343736u};
 };
 
@@ -130,6 +138,9 @@ class Flash final : public Peripheral {
   // Direct view of the array for tests and the world (offset from 0x08000000).
   const std::vector<std::uint8_t>& contents() const { return memory_; }
   std::vector<std::uint8_t>& mutable_contents() { return memory_; }
+  // The user option bytes (FLASH_OPTR; option_bytes.h).
+  OptionBytes& options() { return options_; }
+  const OptionBytes& options() const { return options_; }
 
  private:
   // The registers without code of their own (register_table.h).
@@ -160,7 +171,7 @@ class Flash final : public Peripheral {
   Picoseconds now_ = 0;
   std::vector<std::uint8_t> memory_;
   int file_ = -1;  // the persistence file, open for writing; -1: none
-  std::uint32_t acr_ = 0, sr_ = 0, cr_ = 0, optr_ = 0;
+  std::uint32_t acr_ = 0, sr_ = 0, cr_ = 0;
   std::uint32_t wrp_[4] = {};  // WRP1AR, WRP1BR, WRP2AR, WRP2BR
   int key_stage_ = 0;          // 1 after KEY1
   bool keys_dead_ = false;     // a wrong key: locked until reset
@@ -174,6 +185,7 @@ class Flash final : public Peripheral {
   long operations_ = 0;
   std::mt19937_64 rng_;
   std::function<void()> power_cut_hook_;
+  OptionBytes options_;
 };
 
 }  // namespace mjc::g474model

@@ -40,6 +40,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <random>
 
 #include "hal/stm32g4/mmio.h"
 #include "mjc/g474model/as5047p.h"
@@ -61,7 +62,7 @@ inline constexpr int kFlash = 4, kRcc = 5, kFdcan1It0 = 21, kFdcan1It1 = 22, kTi
                      kTim3 = 29, kSpi1 = 35;
 }
 
-enum class ResetCause : std::uint8_t { kSoftware, kIwdg, kPowerCut };
+enum class ResetCause : std::uint8_t { kSoftware, kIwdg, kPowerCut, kOptionLoad };
 const char* ResetCauseName(ResetCause c);
 
 // Thrown by the default reset handler (and caught by the owner).
@@ -73,9 +74,16 @@ struct TimeLimitReached {
   Picoseconds at;
 };
 
+// What the board puts on PB8-BOOT0 (the world's side of the boot decision).
+enum class Boot0Pin : std::uint8_t { kPulledDown, kPulledUp, kFloating };
+
 struct ChipConfig {
   RccConfig rcc;
   FlashConfig flash;
+  // The joint board's schematic has PB8 pulled down (docs/BRINGUP.md); a floating pin
+  // reads a level drawn from `boot0_seed` at every reset.
+  Boot0Pin boot0 = Boot0Pin::kPulledDown;
+  std::uint64_t boot0_seed = 1;
   unsigned access_cycles = 4;  // per register access (AHB/APB bridge, a few cycles)
   unsigned exception_cycles = 12;
 };
@@ -127,6 +135,17 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   // comes back: a power-on reset.
   void PowerCut();
   int resets() const { return resets_; }
+  // Where the last reset (or the first power-on) booted, from the loaded option bytes
+  // and PB8 (option_bytes.h, RM0440 §2.6). Anything but main flash runs no image of
+  // ours: the owner calls RunWithoutImage instead of starting the firmware.
+  BootSource boot_source() const { return boot_; }
+  // The code the chip booted is not ours (ST's ROM bootloader, which has no FDCAN on
+  // the G47x, or SRAM): the chip runs the world's events until a reset (which reaches
+  // the reset handler as any other) or the time limit; returns at once when nothing
+  // is left to happen.
+  void RunWithoutImage();
+  // The board's PB8 from now on (sampled at the next reset).
+  void SetBoot0Pin(Boot0Pin pin);
 
   // ── The world's side ────────────────────────────────────────────────────────────
   // The motor's quadrature encoder: channels A and B on these pins.
@@ -190,6 +209,8 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   bool LineHigh(int irq) const;
   int CurrentPriority() const;
   void DoReset(ResetCause cause);
+  // The boot decision at reset release.
+  void SampleBoot();
   void OnPinLevel(PinId p, bool level);
   Drive AfDrive(PinId p) const;
   void CheckClocks() { rules_.Check(now_, flash_.latency()); }
@@ -229,6 +250,8 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   std::vector<int> active_stack_;
   bool primask_ = false;
   int resets_ = 0;
+  BootSource boot_ = BootSource::kMainFlash;
+  std::mt19937_64 boot0_rng_;
   std::optional<ResetCause> reset_pending_;
   std::function<void(ResetCause)> reset_handler_;
 };

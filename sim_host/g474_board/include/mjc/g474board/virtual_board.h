@@ -71,6 +71,10 @@ struct VirtualBoardConfig {
   std::string flash_path;
   // The chip's unique device ID (RM0440 §48.1), three words as the factory wrote them.
   std::array<std::uint32_t, 3> unique_id = {0x00400031u, 0x4E4B5003u, 0x20343736u};
+  // What the board puts on PB8-BOOT0 (docs/BRINGUP.md: a pull-down). With the factory
+  // option bytes the pin decides the boot: pulled up, the chip starts ST's ROM
+  // bootloader and runs none of the firmware.
+  g474model::Boot0Pin boot0 = g474model::Boot0Pin::kPulledDown;
   // Virtual seconds per wall second; 0: as fast as the machine runs it.
   double speed = 1;
   // The run ends (after delivering what the link holds) once this much virtual time
