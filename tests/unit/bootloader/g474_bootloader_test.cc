@@ -310,8 +310,8 @@ TEST(G474Bootloader, AnUpdateOverTheBusThenTheResetStartsTheNewImage) {
 
 // The chip as the bootloader found it, with every BoardInfo: FLASH_OPTR as the model's
 // factory value (RM0440 FLASH_OPTR reset value 0xFFEFF8AA: nSWBOOT0 = 1, so the chip
-// samples its BOOT0 pin), the power-on's flags (BORRSTF bit 27, PINRSTF bit 26 → bits
-// 2 and 1), and the crystal's PLL.
+// samples its BOOT0 pin), the power-on's flags (RCC_CSR's top byte: BORRSTF bit 27,
+// PINRSTF bit 26 → bits 3 and 2), and the crystal's PLL.
 TEST(G474Bootloader, ReportsItsOptionBytesClockAndResetFlags) {
   Rig rig;
   EXPECT_FALSE(rig.Run(250 * kMs));
@@ -319,7 +319,7 @@ TEST(G474Bootloader, ReportsItsOptionBytesClockAndResetFlags) {
   ASSERT_EQ(chip.size(), 1u);
   EXPECT_EQ(chip[0].first.option_bytes, 0xFFEFF8AAu);
   EXPECT_TRUE(protocol::BootsFromPin(chip[0].first.option_bytes));
-  EXPECT_EQ(chip[0].first.reset_flags, (1u << 2) | (1u << 1));
+  EXPECT_EQ(chip[0].first.reset_flags, (1u << 3) | (1u << 2));
   EXPECT_EQ(chip[0].first.clock, protocol::ClockSource::kHsePll);
   EXPECT_EQ(chip[0].first.clock_fault, protocol::ClockFault::kNone);
   EXPECT_TRUE(chip[0].first.hse_ready);

@@ -59,9 +59,9 @@ ResetFlags PeekResetFlags() {
   using namespace rcc::csr;
   ResetFlags r;
   r.software = kSftrstf.IsSet(flags);
-  // OBLRSTF (bit 25) up to LPWRRSTF (bit 31): the seven flags, in order.
+  // RCC_CSR's top byte: OBLRSTF (bit 25) up to LPWRRSTF (bit 31); bit 24 is reserved.
   static_assert(kOblrstf.Bit() == 1u << 25);
-  r.flags = static_cast<std::uint8_t>(flags >> 25);
+  r.flags = static_cast<std::uint8_t>(flags >> 24);
   // The most specific cause first, as the application's TakeResetCause() orders them.
   if (kIwdgrstf.IsSet(flags) || kWwdgrstf.IsSet(flags)) {
     r.cause = protocol::ResetCause::kWatchdog;

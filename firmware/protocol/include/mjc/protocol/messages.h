@@ -432,10 +432,10 @@ constexpr bool ValidEnumValue(ClockFault f) { return static_cast<std::uint8_t>(f
 
 // The chip as the bootloader found it, with every BoardInfo: the option bytes (the raw
 // FLASH_OPTR of the G474: nSWBOOT0 bit 26, nBOOT0 bit 27, DBANK bit 22; the factory
-// value is 0xFFEFF8AA), the reset flags of its reset (RCC_CSR bits 25..31 as bits
-// 0..6: OBL, PIN, BOR, SFT, IWDG, WWDG, LPWR), the clock it runs on and how the
-// crystal's bring-up ended; hse_ready: the crystal runs now (it may have started after
-// its timeout).
+// value is 0xFFEFF8AA), the reset flags of its reset (RCC_CSR's top byte, bits 24..31
+// as bits 0..7: bit 0 reserved (0), then OBL, PIN, BOR, SFT, IWDG, WWDG, LPWR), the clock
+// it runs on and how the crystal's bring-up ended; hse_ready: the crystal runs now (it
+// may have started after its timeout).
 struct ChipInfo {
   std::uint32_t option_bytes = 0;
   std::uint8_t reset_flags = 0;
@@ -598,12 +598,12 @@ MJC_MESSAGE(BootStatus, kBootStatus, 8, kBoard, MakeSignal("state", &T::state, 0
             MakeSignal("reason", &T::reason, 4, 4), MakeSignal("error", &T::error, 8, 8),
             MakeSignal("progress_permille", &T::progress_permille, 16, 16, "1/1000"),
             MakeSignal("tick_ms", &T::tick_ms, 32, 32, "ms"));
-MJC_MESSAGE(ChipInfo, kChipInfo, 6, kBoard,
+MJC_MESSAGE(ChipInfo, kChipInfo, 7, kBoard,
             MakeSignal("option_bytes", &T::option_bytes, 0, 32),
-            MakeSignal("reset_flags", &T::reset_flags, 32, 7),
-            MakeSignal("hse_ready", &T::hse_ready, 39, 1),
-            MakeSignal("clock", &T::clock, 40, 4),
-            MakeSignal("clock_fault", &T::clock_fault, 44, 4));
+            MakeSignal("reset_flags", &T::reset_flags, 32, 8),
+            MakeSignal("hse_ready", &T::hse_ready, 40, 1),
+            MakeSignal("clock", &T::clock, 44, 4),
+            MakeSignal("clock_fault", &T::clock_fault, 48, 8));
 MJC_MESSAGE(BootHold, kBootHold, 4, kHost, MakeSignal("key", &T::key, 0, 32));
 MJC_MESSAGE(BootCommand, kBootCommand, 2, kHost, MakeSignal("request", &T::request, 0, 8),
             MakeSignal("sequence", &T::sequence, 8, 8));

@@ -34,7 +34,7 @@ namespace mjc::boot::g474 {
 struct ResetFlags {
   bool software = false;  // SFTRSTF: a software reset (AIRCR.SYSRESETREQ)
   protocol::ResetCause cause = protocol::ResetCause::kUnknown;
-  std::uint8_t flags = 0;  // RCC_CSR bits 25..31 (OBL .. LPWR) as bits 0..6 (ChipInfo)
+  std::uint8_t flags = 0;  // RCC_CSR bits 24..31 (OBL .. LPWR at 1..7) for ChipInfo
 };
 ResetFlags PeekResetFlags();
 // Clears them (RCC_CSR.RMVF): once the bootloader stays, the application will not run
