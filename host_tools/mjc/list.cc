@@ -71,6 +71,19 @@ nlohmann::json NodeJson(int node, const host::ScannedNode& n) {
     j["calibrated"] = nullptr;
     j["fault"] = nullptr;
   }
+  if (n.chip) {
+    char optr[16];
+    std::snprintf(optr, sizeof optr, "0x%08x", n.chip->option_bytes);
+    nlohmann::json warnings = nlohmann::json::array();
+    for (const std::string& w : host::ChipWarnings(*n.chip)) warnings.push_back(w);
+    j["chip"] = {{"option_bytes", optr},
+                 {"boots_from_pin", protocol::BootsFromPin(n.chip->option_bytes)},
+                 {"clock", host::ClockSourceName(n.chip->clock)},
+                 {"clock_fault", static_cast<int>(n.chip->clock_fault)},
+                 {"hse_ready", n.chip->hse_ready},
+                 {"reset_flags", n.chip->reset_flags},
+                 {"warnings", warnings}};
+  }
   return j;
 }
 
@@ -144,6 +157,13 @@ void ListBoards(const std::string& iface, int silence_ms, bool json) {
                   BuildMatch(*info).c_str(), state.c_str(), "-",
                   std::string(host::ResetCauseName(info->reset_cause)).c_str(),
                   Hex4(info->instance).c_str(), stays.c_str());
+      if (n.chip) {
+        std::printf("      option bytes 0x%08x, clock: %s\n", n.chip->option_bytes,
+                    std::string(host::ClockSourceName(n.chip->clock)).c_str());
+        for (const std::string& w : host::ChipWarnings(*n.chip)) {
+          std::printf("      warning: %s\n", w.c_str());
+        }
+      }
       continue;
     }
     const auto& h = n.heartbeat;

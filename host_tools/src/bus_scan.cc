@@ -44,6 +44,10 @@ void BusScan::Handle(const CanFrame& f) {
     n.identity.OnHeartbeat(s.tick_ms * (kBoardTickHz / 1000u));
     n.boot_status = s;
     n.bootloader_clock = true;
+  } else if (function == static_cast<std::uint8_t>(Function::kChipInfo)) {
+    protocol::ChipInfo c;
+    if (Decode(f, &c) == DecodeError::kOk) n.chip = c;
+    return;
   } else {
     return;
   }

@@ -158,8 +158,41 @@ std::string_view StayReasonName(protocol::StayReason reason) {
       return "boot loop: 3 starts unconfirmed";
     case protocol::StayReason::kUpdate:
       return "update begun";
+    case protocol::StayReason::kNoClock:
+      return "no crystal clock";
   }
   return "?";
+}
+
+std::string_view ClockSourceName(protocol::ClockSource source) {
+  switch (source) {
+    case protocol::ClockSource::kHsi16:
+      return "HSI16";
+    case protocol::ClockSource::kHsePll:
+      return "crystal";
+    case protocol::ClockSource::kHsiPll:
+      return "HSI16 PLL";
+    case protocol::ClockSource::kOther:
+      break;
+  }
+  return "other";
+}
+
+std::vector<std::string> ChipWarnings(const protocol::ChipInfo& chip) {
+  std::vector<std::string> out;
+  if (protocol::BootsFromPin(chip.option_bytes)) {
+    out.push_back(
+        "boots from its BOOT0 pin (option bytes nSWBOOT0 = 1): a high PB8 starts ST's "
+        "ROM "
+        "bootloader, which has no CAN");
+  }
+  if (chip.clock != protocol::ClockSource::kHsePll) {
+    std::string w = "runs on " + std::string(ClockSourceName(chip.clock)) +
+                    ", not its crystal (±1 % instead of ppm; ";
+    w += chip.hse_ready ? "the crystal started late" : "the crystal does not run";
+    out.push_back(w + ")");
+  }
+  return out;
 }
 
 std::string_view BootErrorName(protocol::BootError error) {

@@ -155,12 +155,16 @@ void Run(const RunOptions& options) {
   const stm32g4::FdcanResult can_result = g_can.Init(NodeFilters(node));
 
   // The board. Its first report (BoardInfo) says which build runs and why it started;
-  // the rest of the boot facts keep it from running the motor: a clock that did not
-  // reach 170 MHz, a joint encoder or CAN controller that did not come up.
+  // the rest of the boot facts keep it from running the motor: a clock not from the
+  // crystal (HSI16's PLL after a crystal that did not start, or worse), a joint encoder
+  // or CAN controller that did not come up.
   app::JointBoardConfig config{
       app::DefaultJointConfig(), {}, CalibrationPage(), CalibrationPage() + 1};
   config.can.node = node;
-  config.can.fd = true;  // FDCAN runs CAN FD with bit-rate switching (stm32g4/fdcan.h)
+  // FDCAN runs CAN FD with bit-rate switching (stm32g4/fdcan.h); on HSI16 (no crystal)
+  // the 5 Mbit/s data phase is beyond HSI16's accuracy (hal/README.md, "Clock"), so
+  // the board then sends classical frames only.
+  config.can.fd = startup.clock == stm32g4::ClockResult::kOk;
   if (options.host_timeout_ms) config.can.host_timeout_ms = *options.host_timeout_ms;
   config.can.identity.build = header ? header->commit : build::kCommit;
   config.can.identity.dirty = header ? header->dirty : build::kDirty;

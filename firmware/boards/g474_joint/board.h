@@ -66,6 +66,9 @@ constexpr std::array<stm32g4::CanFilter, 9> NodeFilters(std::uint8_t node) {
 // came from a fault handler, which exception it was.
 struct StartupReport {
   stm32g4::ClockResult clock = stm32g4::ClockResult::kOk;
+  // When `clock` failed: the bring-up from HSI16 (the same frequencies, HSI16's
+  // accuracy), which lets the board report the fault on the bus.
+  std::optional<stm32g4::ClockResult> fallback;
   bool crashed = false;  // the previous run ended in DefaultHandler
   std::uint32_t crash_exception =
       0;  // its exception number (IPSR): 2 NMI, 3 HardFault, ..

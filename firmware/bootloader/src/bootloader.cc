@@ -35,6 +35,8 @@ BootAction Bootloader::Start(std::uint32_t now_ms, bool software_reset) {
   if (image_.check != ImageCheck::kValid) {
     Stay(StayReason::kNoValidImage);
     error_ = ToBootError(image_.check);
+  } else if (!config_.clock_ok) {
+    Stay(StayReason::kNoClock);
   } else if (requested) {
     Stay(StayReason::kRequested);
   } else if (BootAttempts(*handoff_, image_.header.image_crc) >= kMaxBootAttempts) {
@@ -344,6 +346,9 @@ void Bootloader::SendInfo() {
   info.reset_cause = config_.reset_cause;
   info.instance = config_.instance;
   Push(protocol::Encode(info, config_.node));
+  if (config_.chip_info != nullptr) {
+    Push(protocol::Encode(config_.chip_info(), config_.node));
+  }
   last_info_ms_ = now_ms_;
 }
 

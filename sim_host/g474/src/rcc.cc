@@ -76,7 +76,7 @@ void Rcc::Start(Osc o, Picoseconds delay) {
   clocks_.valid = false;
   osc_[o].on = true;
   osc_[o].ready = false;
-  osc_[o].ready_at = now_ + delay;
+  osc_[o].ready_at = delay == kNever ? kNever : now_ + delay;
 }
 
 void Rcc::Stop(Osc o) {

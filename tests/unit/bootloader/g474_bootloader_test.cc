@@ -308,4 +308,75 @@ TEST(G474Bootloader, AnUpdateOverTheBusThenTheResetStartsTheNewImage) {
   EXPECT_TRUE(rig.chip().violations().empty()) << Violations(rig.chip());
 }
 
+// The chip as the bootloader found it, with every BoardInfo: FLASH_OPTR as the model's
+// factory value (RM0440 FLASH_OPTR reset value 0xFFEFF8AA: nSWBOOT0 = 1, so the chip
+// samples its BOOT0 pin), the power-on's flags (RCC_CSR's top byte: BORRSTF bit 27,
+// PINRSTF bit 26 → bits 3 and 2), and the crystal's PLL.
+TEST(G474Bootloader, ReportsItsOptionBytesClockAndResetFlags) {
+  Rig rig;
+  EXPECT_FALSE(rig.Run(250 * kMs));
+  const auto chip = rig.Sent<protocol::ChipInfo>();
+  ASSERT_EQ(chip.size(), 1u);
+  EXPECT_EQ(chip[0].first.option_bytes, 0xFFEFF8AAu);
+  EXPECT_TRUE(protocol::BootsFromPin(chip[0].first.option_bytes));
+  EXPECT_EQ(chip[0].first.reset_flags, (1u << 3) | (1u << 2));
+  EXPECT_EQ(chip[0].first.clock, protocol::ClockSource::kHsePll);
+  EXPECT_EQ(chip[0].first.clock_fault, protocol::ClockFault::kNone);
+  EXPECT_TRUE(chip[0].first.hse_ready);
+  EXPECT_TRUE(rig.chip().violations().empty()) << Violations(rig.chip());
+}
+
+// A crystal that never starts: the bootloader does not hand over to a valid image, runs
+// its PLL from HSI16 to the same 170 MHz, serves the bus at 1 Mbit/s and says why.
+TEST(G474Bootloader, WithADeadCrystalItStaysOnHsiAndSaysWhy) {
+  Rig rig;
+  rig.chip().rcc().SetHseStartup(g474model::kNever);
+  const auto file = test::MakeFile(test::MakeImage(3000, 44));
+  auto& memory = rig.chip().flash().mutable_contents();
+  std::copy(file.begin(), file.end(), memory.begin() + 8 * 2048);
+  EXPECT_FALSE(rig.Run(1100 * kMs)) << "no hand-over";
+  EXPECT_TRUE(rig.resets.empty()) << "the watchdog is refreshed";
+  EXPECT_EQ(rig.chip().rcc().sysclk_hz(), 170e6);
+  EXPECT_EQ(rig.chip().rcc().fdcan_kernel_hz(), 85e6);
+  EXPECT_EQ(rig.chip().fdcan1().nominal_bitrate(), 1e6);
+  const auto status = rig.Sent<protocol::BootStatus>();
+  ASSERT_GE(status.size(), 10u);
+  for (const auto& [s, at] : status) {
+    EXPECT_EQ(s.state, BootState::kReady);
+    EXPECT_EQ(s.reason, StayReason::kNoClock);
+  }
+  // Its clock is HSI16's (exact in the model): 100 ms of virtual time between two.
+  const Picoseconds period = status[5].second - status[4].second;
+  EXPECT_NEAR(static_cast<double>(period) / kMs, 100.0, 0.1);
+  const auto chip = rig.Sent<protocol::ChipInfo>();
+  ASSERT_GE(chip.size(), 1u);
+  EXPECT_EQ(chip.back().first.clock, protocol::ClockSource::kHsiPll);
+  EXPECT_EQ(chip.back().first.clock_fault, protocol::ClockFault::kHseTimeout);
+  EXPECT_FALSE(chip.back().first.hse_ready);
+  // The first frame within a few ms of the reset: the crystal's wait is bounded.
+  ASSERT_FALSE(rig.sent.empty());
+  EXPECT_LT(rig.sent.front().second, 10 * kMs);
+  EXPECT_TRUE(rig.chip().violations().empty()) << Violations(rig.chip());
+}
+
+// A crystal that starts 50 ms after HSEON, far beyond tSU(HSE): the bootloader has given
+// up on it after 5 ms and stays on HSI16; its ChipInfo then shows the crystal running.
+TEST(G474Bootloader, WithALateCrystalItStaysAndReportsTheCrystalRunningLate) {
+  Rig rig;
+  rig.chip().rcc().SetHseStartup(50 * kMs);
+  const auto file = test::MakeFile(test::MakeImage(3000, 45));
+  auto& memory = rig.chip().flash().mutable_contents();
+  std::copy(file.begin(), file.end(), memory.begin() + 8 * 2048);
+  EXPECT_FALSE(rig.Run(1100 * kMs)) << "no hand-over";
+  const auto status = rig.Sent<protocol::BootStatus>();
+  ASSERT_FALSE(status.empty());
+  EXPECT_EQ(status.back().first.reason, StayReason::kNoClock);
+  const auto chip = rig.Sent<protocol::ChipInfo>();
+  ASSERT_GE(chip.size(), 2u);  // at its start and 1 s later
+  EXPECT_FALSE(chip.front().first.hse_ready) << "at its start, the crystal was not ready";
+  EXPECT_TRUE(chip.back().first.hse_ready) << "1 s later it runs";
+  EXPECT_EQ(chip.back().first.clock, protocol::ClockSource::kHsiPll);
+  EXPECT_TRUE(rig.chip().violations().empty()) << Violations(rig.chip());
+}
+
 }  // namespace

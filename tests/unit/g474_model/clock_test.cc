@@ -52,6 +52,50 @@ TEST(G474Rcc, ReadyFlagsTakeTheirStartUpTime) {
   EXPECT_LT(waited, Microseconds(2002));
 }
 
+// RM0440 RCC_CR.HSERDY: "set by hardware to indicate that the HSE oscillator is
+// stable". A crystal that does not oscillate never sets it: the switch to it never
+// completes (CFGR.SWS keeps HSI16) and a PLL fed by it never locks.
+TEST(G474Rcc, AnHseThatNeverStartsNeverSetsHserdy) {
+  VirtualChip c;
+  c.rcc().SetHseStartup(kNever);
+  c.Write(kRcc + 0x00, c.Read(kRcc, 4) | (1u << 16), 4);  // HSEON
+  c.AdvanceTo(c.now() + Microseconds(1'000'000));
+  EXPECT_EQ(c.Read(kRcc, 4) & (1u << 17), 0u) << "HSERDY after 1 s";
+  c.Write(kRcc + 0x08, (c.Read(kRcc + 0x08, 4) & ~3u) | 2u, 4);  // SW = HSE
+  c.AdvanceTo(c.now() + Microseconds(1000));
+  EXPECT_EQ((c.Read(kRcc + 0x08, 4) >> 2) & 3u, 1u) << "SWS stays HSI16";
+  EXPECT_DOUBLE_EQ(c.rcc().sysclk_hz(), 16e6);
+  c.Write(kRcc + 0x08, (c.Read(kRcc + 0x08, 4) & ~3u) | 1u, 4);  // SW = HSI16 again
+  // PLLSRC = HSE, M = /6, N = 85, PLLREN, then PLLON: it cannot lock.
+  c.Write(kRcc + 0x0C, 3u | (5u << 4) | (85u << 8) | (1u << 24), 4);
+  c.Write(kRcc + 0x00, c.Read(kRcc, 4) | (1u << 24), 4);
+  c.AdvanceTo(c.now() + Microseconds(1000));
+  EXPECT_EQ(c.Read(kRcc, 4) & (1u << 25), 0u) << "PLLRDY";
+  EXPECT_FALSE(c.violations().empty()) << "PLLON with its source not ready";
+}
+
+// A crystal that starts late: HSERDY exactly when the world says, not at tSU(HSE).
+TEST(G474Rcc, AnHseThatStartsLateSetsHserdyThen) {
+  VirtualChip c;
+  c.rcc().SetHseStartup(Microseconds(50'000));
+  const Picoseconds t0 = c.now();
+  c.Write(kRcc + 0x00, c.Read(kRcc, 4) | (1u << 16), 4);  // HSEON
+  c.AdvanceTo(t0 + Microseconds(49'990));
+  EXPECT_EQ(c.Read(kRcc, 4) & (1u << 17), 0u) << "HSERDY before 50 ms";
+  while (!(c.Read(kRcc, 4) & (1u << 17))) {
+  }
+  EXPECT_GE(c.now() - t0, Microseconds(50'000));
+  EXPECT_LT(c.now() - t0, Microseconds(50'002));
+  // HSEON cleared and set again: the crystal starts anew, as late.
+  c.Write(kRcc + 0x00, c.Read(kRcc, 4) & ~(1u << 16), 4);
+  EXPECT_EQ(c.Read(kRcc, 4) & (1u << 17), 0u);
+  const Picoseconds t1 = c.now();
+  c.Write(kRcc + 0x00, c.Read(kRcc, 4) | (1u << 16), 4);
+  c.AdvanceTo(t1 + Microseconds(2000));
+  EXPECT_EQ(c.Read(kRcc, 4) & (1u << 17), 0u) << "not at the datasheet's 2 ms";
+  EXPECT_TRUE(c.violations().empty()) << c.violations().ToString();
+}
+
 TEST(G474Rcc, BringUpGives170MHzAndTheBusClocks) {
   VirtualChip c;
   BringUp170(c);

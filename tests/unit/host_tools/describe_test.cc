@@ -97,4 +97,28 @@ TEST(Describe, EveryCalibrationRefusalSaysWhichField) {
   EXPECT_EQ(Validate(good), CalibrationError::kOk);
 }
 
+// mjc list's warnings from a bootloader's ChipInfo. FLASH_OPTR's factory value
+// 0xFFEFF8AA has nSWBOOT0 (bit 26) = 1: BOOT0 comes from the PB8 pin (RM0440
+// FLASH_OPTR; CMSIS FLASH_OPTR_nSWBOOT0_Pos 26). 0xFBEFF8AA is the same with nSWBOOT0
+// cleared, as commissioning leaves it.
+TEST(Describe, ChipWarningsForTheBootPinAndTheClock) {
+  protocol::ChipInfo chip;
+  chip.option_bytes = 0xFFEFF8AAu;
+  chip.clock = protocol::ClockSource::kHsePll;
+  auto w = host::ChipWarnings(chip);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("BOOT0 pin"), std::string::npos) << w[0];
+  chip.option_bytes = 0xFBEFF8AAu;
+  EXPECT_TRUE(host::ChipWarnings(chip).empty());
+  chip.clock = protocol::ClockSource::kHsiPll;
+  chip.clock_fault = protocol::ClockFault::kHseTimeout;
+  w = host::ChipWarnings(chip);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("HSI16 PLL"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("does not run"), std::string::npos) << w[0];
+  chip.hse_ready = true;
+  EXPECT_NE(host::ChipWarnings(chip)[0].find("started late"), std::string::npos);
+  EXPECT_EQ(host::StayReasonName(protocol::StayReason::kNoClock), "no crystal clock");
+}
+
 }  // namespace

@@ -19,6 +19,39 @@ constexpr auto kBoardType = static_cast<std::uint16_t>(BoardType::kG474Joint);
 
 void Service() { stm32g4::RefreshWatchdog(); }
 
+// The wire's numbers are the driver's.
+static_assert(static_cast<int>(protocol::ClockSource::kHsi16) ==
+                  static_cast<int>(stm32g4::ClockSource::kHsi16) &&
+              static_cast<int>(protocol::ClockSource::kHsePll) ==
+                  static_cast<int>(stm32g4::ClockSource::kHsePll) &&
+              static_cast<int>(protocol::ClockSource::kHsiPll) ==
+                  static_cast<int>(stm32g4::ClockSource::kHsiPll) &&
+              static_cast<int>(protocol::ClockSource::kOther) ==
+                  static_cast<int>(stm32g4::ClockSource::kOther));
+static_assert(static_cast<int>(protocol::ClockFault::kHseTimeout) ==
+                  static_cast<int>(stm32g4::ClockResult::kHseTimeout) &&
+              static_cast<int>(protocol::ClockFault::kSwitchTimeout) ==
+                  static_cast<int>(stm32g4::ClockResult::kSwitchTimeout) &&
+              static_cast<int>(protocol::ClockFault::kNone) ==
+                  static_cast<int>(stm32g4::ClockResult::kOk));
+
+// What this run found at its start, for ChipInfo (the rest is read when it is sent).
+struct ChipAtStart {
+  std::uint8_t reset_flags = 0;
+  protocol::ClockFault clock_fault = protocol::ClockFault::kNone;
+};
+ChipAtStart g_chip_at_start;
+
+protocol::ChipInfo ReadChipInfo() {
+  protocol::ChipInfo c;
+  c.option_bytes = OptionBytes();
+  c.reset_flags = g_chip_at_start.reset_flags;
+  c.hse_ready = stm32g4::HseReady();
+  c.clock = static_cast<protocol::ClockSource>(stm32g4::ActiveClockSource());
+  c.clock_fault = g_chip_at_start.clock_fault;
+  return c;
+}
+
 std::array<stm32g4::CanFilter, 3> BootFilters(std::uint8_t node) {
   const auto id = [node](Function f) {
     return static_cast<std::uint16_t>(
@@ -40,7 +73,13 @@ Exit G474Bootloader::Run() {
   stm32g4::DisableInterrupts();
   HoldBridgeOff();
   const ResetFlags reset = PeekResetFlags();
-  const bool clock_ok = stm32g4::ConfigureClocks() == stm32g4::ClockResult::kOk;
+  // The crystal's bring-up waits 5 ms for it (clock.h). Without it the same PLL
+  // frequencies come from HSI16, enough to serve the bus and say why the board stays;
+  // the application is never started on that clock.
+  const stm32g4::ClockResult crystal = stm32g4::ConfigureClocks();
+  const bool clock_ok = crystal == stm32g4::ClockResult::kOk ||
+                        stm32g4::ConfigureClocksFromHsi() == stm32g4::ClockResult::kOk;
+  g_chip_at_start = {reset.flags, static_cast<protocol::ClockFault>(crystal)};
   (void)stm32g4::StartWatchdog();
   (void)flash_.Init();  // a chip of another geometry: every write refused
 
@@ -58,6 +97,8 @@ Exit G474Bootloader::Run() {
   config.instance = BoardInstance();
   config.reset_cause = reset.cause;
   config.service = Service;
+  config.clock_ok = crystal == stm32g4::ClockResult::kOk;
+  config.chip_info = ReadChipInfo;
   node_ = config.node;
 
   bool can_ok = false;

@@ -5,6 +5,7 @@
 #include "hal/stm32g4/mmio.h"
 #include "hal/stm32g4/poll.h"
 #include "hal/stm32g4/regs/cortex_m4.h"
+#include "hal/stm32g4/regs/flash.h"
 #include "hal/stm32g4/regs/rcc.h"
 
 namespace mjc::boot::g474 {
@@ -58,6 +59,9 @@ ResetFlags PeekResetFlags() {
   using namespace rcc::csr;
   ResetFlags r;
   r.software = kSftrstf.IsSet(flags);
+  // RCC_CSR's top byte: OBLRSTF (bit 25) up to LPWRRSTF (bit 31); bit 24 is reserved.
+  static_assert(kOblrstf.Bit() == 1u << 25);
+  r.flags = static_cast<std::uint8_t>(flags >> 24);
   // The most specific cause first, as the application's TakeResetCause() orders them.
   if (kIwdgrstf.IsSet(flags) || kWwdgrstf.IsSet(flags)) {
     r.cause = protocol::ResetCause::kWatchdog;
@@ -96,6 +100,10 @@ void EnableCanPeripherals() {
   const Address apb1enr1 = rcc::kBase + rcc::kApb1enr1;
   SetBits(apb1enr1, rcc::apb1enr1::kFdcanen.Bit());
   (void)Read32(apb1enr1);
+}
+
+std::uint32_t OptionBytes() {
+  return Read32(stm32g4::flash::kBase + stm32g4::flash::kOptr);
 }
 
 std::uint16_t BoardInstance() {

@@ -22,6 +22,8 @@ struct ScannedNode {
   // The last BootStatus: the node runs its bootloader when its last BoardInfo says so
   // (in_bootloader()).
   std::optional<protocol::BootStatus> boot_status;
+  // The last ChipInfo (a bootloader's: option bytes, clock, reset flags).
+  std::optional<protocol::ChipInfo> chip;
   // Its clock was last read from a BootStatus (a bootloader's), not a heartbeat.
   bool bootloader_clock = false;
   std::map<std::uint16_t, int> infos;  // BoardInfo frames heard, by instance

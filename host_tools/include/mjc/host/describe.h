@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "mjc/core/control_tick.h"
 #include "mjc/core/supervisor.h"
@@ -35,6 +36,11 @@ std::string BuildName(std::uint32_t commit, bool dirty);
 // mjc-image's).
 std::string_view BootStateName(protocol::BootState state);
 std::string_view StayReasonName(protocol::StayReason reason);
+// "crystal", "HSI16 PLL", "HSI16", "other".
+std::string_view ClockSourceName(protocol::ClockSource source);
+// What mjc list warns about a board from its bootloader's ChipInfo: one that samples
+// its BOOT0 pin at reset (nSWBOOT0 = 1), one that does not run on its crystal.
+std::vector<std::string> ChipWarnings(const protocol::ChipInfo& chip);
 std::string_view BootErrorName(protocol::BootError error);
 // A BootStatus in a few words, as mjc list shows a board in its bootloader: "ready (no
 // valid image: no_image)", "ready (held by a host)", "receiving 41%", "committed".

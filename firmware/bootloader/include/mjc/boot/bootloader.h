@@ -6,7 +6,9 @@
 //   1. the stay request in the handoff block is taken (read and erased);
 //   2. the installed image is checked (header, board, vectors, CRC of every byte);
 //   3. it stays — answering on the bus with the board's node id — when the image is not
-//      valid, when the application asked (a valid stay request after a software
+//      valid, when the board's clock is not the designed one (no crystal: the board
+//      serves the bus on its internal oscillator but never starts the application on
+//      it), when the application asked (a valid stay request after a software
 //      reset), or when the image has been started kMaxBootAttempts times without
 //      confirming a healthy start (a watchdog reset loop);
 //   4. otherwise it listens for a BootHold for the hold window (200 ms of its own
@@ -89,6 +91,11 @@ struct BootloaderConfig {
   protocol::ResetCause reset_cause = protocol::ResetCause::kUnknown;
   std::uint32_t hold_window_ms = 200;  // 0: no window (boot at once: the QEMU test)
   ServiceHook service = nullptr;       // during long flash work (the watchdog)
+  // False: the board's clock did not come up as designed (no crystal); it stays
+  // (StayReason::kNoClock) whatever the image.
+  bool clock_ok = true;
+  // The chip's report, sent after every BoardInfo; null: none (a board without one).
+  protocol::ChipInfo (*chip_info)() = nullptr;
 };
 
 enum class BootAction : std::uint8_t {

@@ -95,6 +95,7 @@ enum class Function : std::uint8_t {
   kHeartbeat = 0x30,
   kHostHeartbeat = 0x31,
   kBoardInfo = 0x32,
+  kChipInfo = 0x33,  // bootloader → host: option bytes, clock source, reset flags
   // The bootloader (firmware/bootloader/BOOTLOADER.md).
   kBootStatus = 0x38,          // bootloader → host: its state, why it stays, progress
   kBootHold = 0x39,            // host → board: stay in (or enter) the bootloader
@@ -350,8 +351,10 @@ enum class StayReason : std::uint8_t {
   kHoldFrame = 3,     // a BootHold came within the hold window
   kBootLoop = 4,      // the image reset 3 times without confirming a healthy start
   kUpdate = 5,        // an update began: the previous image is no longer whole
+  kNoClock = 6,       // the crystal did not start: no hand-over on a clock that is
+                      // not the designed one (ChipInfo says which and why)
 };
-constexpr bool ValidEnumValue(StayReason r) { return static_cast<std::uint8_t>(r) <= 5; }
+constexpr bool ValidEnumValue(StayReason r) { return static_cast<std::uint8_t>(r) <= 6; }
 
 // Errors of the bootloader. Stable numbers, never renumbered; 1-8 are the image
 // checks (mjc::boot::ImageCheck, the same numbers), 16-31 the update's, 32 and up the
@@ -406,6 +409,48 @@ struct BootStatus {
   std::uint16_t progress_permille = 0;  // of the image programmed (0..1000)
   std::uint32_t tick_ms = 0;
 };
+// What the system clock runs from. Stable numbers.
+enum class ClockSource : std::uint8_t {
+  kHsi16 = 0,   // the internal 16 MHz RC alone (nothing faster came up)
+  kHsePll = 1,  // the crystal through the PLL, 170 MHz: as designed
+  kHsiPll = 2,  // the internal RC through the PLL, 170 MHz: the crystal failed
+  kOther = 3,
+};
+constexpr bool ValidEnumValue(ClockSource c) { return static_cast<std::uint8_t>(c) <= 3; }
+
+// How the crystal's clock bring-up ended (the G474 driver's ClockResult numbers).
+// Stable numbers.
+enum class ClockFault : std::uint8_t {
+  kNone = 0,
+  kVoltage = 1,        // the regulator did not settle
+  kFlashLatency = 2,   // the flash did not take its wait states
+  kHseTimeout = 3,     // the crystal was not ready within its timeout (5 ms)
+  kPllTimeout = 4,     // the PLL did not lock
+  kSwitchTimeout = 5,  // the system clock did not switch to the PLL
+};
+constexpr bool ValidEnumValue(ClockFault f) { return static_cast<std::uint8_t>(f) <= 5; }
+
+// The chip as the bootloader found it, with every BoardInfo: the option bytes (the raw
+// FLASH_OPTR of the G474: nSWBOOT0 bit 26, nBOOT0 bit 27, DBANK bit 22; the factory
+// value is 0xFFEFF8AA), the reset flags of its reset (RCC_CSR's top byte, bits 24..31
+// as bits 0..7: bit 0 reserved (0), then OBL, PIN, BOR, SFT, IWDG, WWDG, LPWR), the clock
+// it runs on and how the crystal's bring-up ended; hse_ready: the crystal runs now (it
+// may have started after its timeout).
+struct ChipInfo {
+  std::uint32_t option_bytes = 0;
+  std::uint8_t reset_flags = 0;
+  bool hse_ready = false;
+  ClockSource clock = ClockSource::kHsePll;
+  ClockFault clock_fault = ClockFault::kNone;
+};
+// FLASH_OPTR's boot bits (RM0440 FLASH_OPTR; CMSIS stm32g474xx.h).
+inline constexpr std::uint32_t kOptrNswboot0 = 1u << 26;  // 0: BOOT0 from nBOOT0
+inline constexpr std::uint32_t kOptrNboot0 = 1u << 27;
+inline constexpr std::uint32_t kOptrDbank = 1u << 22;
+// True when the chip samples its BOOT0 pin (PB8) at every reset: nSWBOOT0 = 1, the
+// factory setting. A floating or high pin then starts ST's ROM bootloader.
+constexpr bool BootsFromPin(std::uint32_t optr) { return (optr & kOptrNswboot0) != 0; }
+
 // "Stay in the bootloader": in the hold window after a reset it makes the bootloader
 // stay; to a running application, it asks it to enter the bootloader. The key guards
 // against a frame meant for something else.
@@ -553,6 +598,12 @@ MJC_MESSAGE(BootStatus, kBootStatus, 8, kBoard, MakeSignal("state", &T::state, 0
             MakeSignal("reason", &T::reason, 4, 4), MakeSignal("error", &T::error, 8, 8),
             MakeSignal("progress_permille", &T::progress_permille, 16, 16, "1/1000"),
             MakeSignal("tick_ms", &T::tick_ms, 32, 32, "ms"));
+MJC_MESSAGE(ChipInfo, kChipInfo, 7, kBoard,
+            MakeSignal("option_bytes", &T::option_bytes, 0, 32),
+            MakeSignal("reset_flags", &T::reset_flags, 32, 8),
+            MakeSignal("hse_ready", &T::hse_ready, 40, 1),
+            MakeSignal("clock", &T::clock, 44, 4),
+            MakeSignal("clock_fault", &T::clock_fault, 48, 8));
 MJC_MESSAGE(BootHold, kBootHold, 4, kHost, MakeSignal("key", &T::key, 0, 32));
 MJC_MESSAGE(BootCommand, kBootCommand, 2, kHost, MakeSignal("request", &T::request, 0, 8),
             MakeSignal("sequence", &T::sequence, 8, 8));
@@ -573,7 +624,7 @@ using AllMessages =
                ParamRead, ParamValue, TelemetryAngles, TelemetryAngleBatch,
                TelemetryTorque, TelemetryPower, TelemetryEnergy, TelemetryControl,
                Heartbeat, BoardInfo, HostHeartbeat, BootStatus, BootHold, BootCommand,
-               BootResult>;
+               BootResult, ChipInfo>;
 
 namespace detail {
 template <class... M>

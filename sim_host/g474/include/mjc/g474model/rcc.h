@@ -86,6 +86,16 @@ class Rcc final : public Peripheral {
   void PowerOn();
   void SetResetFlags(std::uint32_t flags) { csr_ |= flags & csr::kResetFlags; }
 
+  // The world's crystal: how long the HSE takes from HSEON to HSERDY, from the next
+  // HSEON on (one already started keeps its time). kNever: a crystal that never starts
+  // (cracked, unsoldered, a load capacitance it cannot oscillate with), so HSERDY stays
+  // 0 for as long as HSEON is set, SW = HSE never completes and a PLL fed by it never
+  // locks. A delay beyond the datasheet's tSU(HSE) is a crystal that starts late (an
+  // out-of-spec part, a cold board). A system reset keeps the setting: the crystal is
+  // the board's, not the chip's.
+  void SetHseStartup(Picoseconds delay) { config_.hse_startup = delay; }
+  Picoseconds hse_startup() const { return config_.hse_startup; }
+
   // Frequencies in Hz; 0 while the source is off or not ready. Asked at every register
   // access (the chip's time, the timers' counting), so computed once per change of the
   // registers or oscillators they depend on.

@@ -3,7 +3,8 @@
 // the host's tests run against the chip's register models.
 //
 // In order: the bridge's enable low; the reset flags read (cleared only once it stays);
-// the clock tree (170 MHz; FDCAN from PLLQ, 85 MHz); the watchdog (100 ms); the flash
+// the clock tree (170 MHz; FDCAN from PLLQ, 85 MHz; from HSI16 when the crystal is not
+// ready within 5 ms); the watchdog (100 ms); the flash
 // driver with only the application region writable; the board's identity (node id,
 // hardware revision) from its pages, or node 1 / revision 1 without a record; FDCAN1 with
 // three filters (BootHold, BootCommand and the bootloader's ISO-TP channel, to this
@@ -11,8 +12,13 @@
 // CAN controller polled (PRIMASK stays set: no interrupt is taken), the watchdog
 // refreshed every pass and between the blocks of long flash work.
 //
-// Without a working clock tree (no crystal) the bootloader does not join the bus — its
-// bit timing would be wrong — and starts a valid image without a hold window.
+// Without the crystal the bootloader runs the same PLL from HSI16 (the same 170 MHz and
+// 85 MHz, so the same bit timing), serves the bus at 1 Mbit/s with ChipInfo saying so,
+// and stays (StayReason::kNoClock): it never hands over to the application on a clock
+// other than the designed one. A host's Boot resets the chip, which tries the crystal
+// again. Were even the PLL from HSI16 to fail, it would stay off the bus (a bit timing
+// it cannot meet) and never hand over either. Why HSI16 is enough for the bus, and where
+// it is not: hal/README.md, "Clock".
 #pragma once
 
 #include <cstdint>

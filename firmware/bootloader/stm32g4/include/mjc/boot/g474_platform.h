@@ -8,7 +8,8 @@
 //   GPIOA (PA11/PA12 FDCAN1), GPIOB (PB10, the bridge's enable), FDCAN1, its kernel
 //     clock (CCIPR.FDCANSEL): reset (RCC reset bits) and their clocks off — as at reset;
 //   the clock tree (HSE, PLL at 170 MHz): SYSCLK back on HSI16, AHB /1, PLL off and
-//     PLLCFGR at its reset value, HSE off — as at reset;
+//     PLLCFGR at its reset value, HSE off — as at reset (it hands over only when the
+//     crystal ran: g474_bootloader.h);
 //   NVIC: every interrupt disabled and every pending one cleared; PRIMASK cleared at the
 //     jump (mjc/boot/jump.h) — as at reset;
 // and left as they are, documented:
@@ -33,6 +34,7 @@ namespace mjc::boot::g474 {
 struct ResetFlags {
   bool software = false;  // SFTRSTF: a software reset (AIRCR.SYSRESETREQ)
   protocol::ResetCause cause = protocol::ResetCause::kUnknown;
+  std::uint8_t flags = 0;  // RCC_CSR bits 24..31 (OBL .. LPWR at 1..7) for ChipInfo
 };
 ResetFlags PeekResetFlags();
 // Clears them (RCC_CSR.RMVF): once the bootloader stays, the application will not run
@@ -46,8 +48,12 @@ void ClearResetFlags();
 void HoldBridgeOff();
 
 // FDCAN1's pins (PA11 RX, PA12 TX, AF9) and clocks (kernel clock PLLQ, 85 MHz, once
-// the clock tree runs). Nothing else is clocked.
+// the clock tree runs: from the crystal, or from HSI16 when it failed). Nothing else is
+// clocked.
 void EnableCanPeripherals();
+
+// The raw FLASH_OPTR (RM0440 FLASH_OPTR: the option bytes as loaded at reset).
+std::uint32_t OptionBytes();
 
 // The physical board: the chip's 96-bit unique id (RM0440 §48.1, at 0x1FFF7590), its
 // three words XOR-folded to 16 bits — the fold the application reports in its BoardInfo,

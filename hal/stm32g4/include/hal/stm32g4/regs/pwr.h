@@ -5,6 +5,9 @@
 
 namespace mjc::stm32g4::pwr {
 
+inline constexpr FieldDef kCr1Fields[] = {
+    {"VOS", 9, 2},  // voltage range: 01 = Range 1 (reset value), 10 = Range 2
+};
 inline constexpr FieldDef kSr2Fields[] = {
     {"VOSF", 10, 1},  // 1 while the regulator is reaching a new voltage level
 };
@@ -12,6 +15,7 @@ inline constexpr FieldDef kCr5Fields[] = {
     {"R1MODE", 8, 1},  // 0 = Range 1 boost (reset value 1 = Range 1 normal)
 };
 inline constexpr RegisterDef kRegisters[] = {
+    {"CR1", 0x00, kCr1Fields},
     {"SR2", 0x14, kSr2Fields},
     {"CR5", 0x80, kCr5Fields},
 };
@@ -20,9 +24,13 @@ inline constexpr BlockDef kBlock{"PWR", 0x40007000u, kRegisters};
 static_assert(WellFormed(kBlock));
 inline constexpr Address kBase = kBlock.base;
 
+inline constexpr std::uint32_t kCr1 = OffsetOf(kBlock, "CR1");
 inline constexpr std::uint32_t kSr2 = OffsetOf(kBlock, "SR2");
 inline constexpr std::uint32_t kCr5 = OffsetOf(kBlock, "CR5");
 
+namespace cr1 {
+inline constexpr Field kVos = FieldOf(kBlock, "CR1", "VOS");
+}  // namespace cr1
 namespace sr2 {
 inline constexpr Field kVosf = FieldOf(kBlock, "SR2", "VOSF");
 }  // namespace sr2
