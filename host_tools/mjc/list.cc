@@ -1,12 +1,14 @@
 // mjc list: every board on the bus, heard without asking anything: node id, image
 // (application or bootloader), build (and whether it is this mjc's), state (a
 // bootloader's: ready, receiving, committed, and why it stays), calibration, latched
-// fault, reset cause, and two boards answering with one node id. It listens until each
-// node heard has shown every board behind its id (host::BusScan: a BoardInfo period and a
-// tenth of the boards' own time), or the bus has been silent for --silence-ms.
+// fault, reset cause, record pages the board could not read (a save cut by a power loss:
+// named under the table), and two boards answering with one node id. It listens until
+// each node heard has shown every board behind its id (host::BusScan: a BoardInfo period
+// and a tenth of the boards' own time), or the bus has been silent for --silence-ms.
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 
 #include "commands.h"
 #include "mjc/build_id.h"
@@ -15,6 +17,19 @@
 
 namespace mjc::cli {
 namespace {
+
+// The record pages a BoardInfo names unreadable, by name ("" when none).
+std::string UnreadablePages(std::uint8_t bits) {
+  namespace u = protocol::flash_unreadable;
+  std::string out;
+  for (const auto& [bit, name] : {std::pair{u::kIdentityA, "identity page A"},
+                                  std::pair{u::kIdentityB, "identity page B"},
+                                  std::pair{u::kCalibrationA, "calibration page A"},
+                                  std::pair{u::kCalibrationB, "calibration page B"}}) {
+    if (bits & bit) out += (out.empty() ? "" : ", ") + std::string(name);
+  }
+  return out;
+}
 
 std::string Hex4(std::uint16_t v) {
   char out[8];
@@ -44,9 +59,10 @@ nlohmann::json NodeJson(int node, const host::ScannedNode& n) {
         info->build == build::kCommit && !info->dirty && !build::kDirty;
     j["reset_cause"] = host::ResetCauseName(info->reset_cause);
     j["instance"] = Hex4(info->instance);
+    j["flash_unreadable"] = UnreadablePages(info->flash_unreadable);
   } else {
-    for (const char* key :
-         {"image", "build", "dirty", "build_matches_mjc", "reset_cause", "instance"}) {
+    for (const char* key : {"image", "build", "dirty", "build_matches_mjc", "reset_cause",
+                            "instance", "flash_unreadable"}) {
       j[key] = nullptr;
     }
   }
@@ -121,6 +137,7 @@ void ListBoards(const std::string& iface, int silence_ms, bool json) {
                       "bus's bitrate?)");
   }
   std::string ambiguous;
+  std::string unreadable;  // per node, printed under the table
   if (!json) {
     std::printf("%-4s  %-11s  %-14s  %-18s  %-11s  %-10s  %-9s  %-8s  %s\n", "node",
                 "image", "build", "", "state", "calibrated", "reset", "instance",
@@ -139,6 +156,12 @@ void ListBoards(const std::string& iface, int silence_ms, bool json) {
       continue;
     }
     const auto& info = n.identity.info();
+    if (info && info->flash_unreadable != 0) {
+      unreadable += "warning: node " + std::to_string(node) + " could not read its " +
+                    UnreadablePages(info->flash_unreadable) +
+                    " (a save cut by a power loss left an ECC error): the other page's "
+                    "record is in use, and the next save erases the bad page\n";
+    }
     if (n.in_bootloader()) {
       // Its state, and why it stays where the application's fault would be.
       const auto& b = n.boot_status;
@@ -180,6 +203,7 @@ void ListBoards(const std::string& iface, int silence_ms, bool json) {
   }
   if (!json) {
     std::printf("this mjc: %s\n", host::BuildName(build::kCommit, build::kDirty).c_str());
+    std::fputs(unreadable.c_str(), stdout);
   }
   if (!ambiguous.empty()) throw Failure(Exit::kAmbiguous, ambiguous);
 }

@@ -199,7 +199,7 @@ std::string_view BootErrorName(protocol::BootError error) {
   using E = protocol::BootError;
   // The image checks have the same numbers and names (mjc::boot::ImageCheck).
   const auto code = static_cast<std::uint8_t>(error);
-  if (code >= 1 && code <= 8)
+  if (code >= 1 && code <= 9)
     return boot::ImageCheckName(static_cast<boot::ImageCheck>(code));
   switch (error) {
     case E::kNone:
@@ -212,6 +212,7 @@ std::string_view BootErrorName(protocol::BootError error) {
     case E::kBadLoadAddress:
     case E::kBadVectors:
     case E::kImageCrc:
+    case E::kUnreadable:
       break;
     case E::kNotReceiving:
       return "not_receiving";

@@ -114,6 +114,7 @@ std::optional<FirmwareImage> CheckFirmwareImage(std::vector<std::uint8_t> file,
     case boot::ImageCheck::kWrongHardware:
     case boot::ImageCheck::kBadLoadAddress:
     case boot::ImageCheck::kBadVectors:
+    case boot::ImageCheck::kUnreadable:  // a board's flash only, never a file's
       *why = name + ": " + boot::ImageCheckName(check);
       return std::nullopt;
   }
@@ -589,6 +590,7 @@ FirmwareUpdate::Step FirmwareUpdate::Commit(UpdateResult* r) {
       case BootError::kImageCrc:
       case BootError::kBadVectors:
       case BootError::kFlashError:
+      case BootError::kUnreadable:
       case BootError::kNotReceiving:
         last_restart_why_ = BootErrorName(answer->error);
         return Step::kRestart;

@@ -13,5 +13,9 @@ int main() {
   std::printf("powercut_points: %d cuts (%d at every step of an update, %d random)\n",
               step.points + random.points, step.points, random.points);
   std::printf("powercut_lost: %d boots (goal 0)\n", step.lost + random.lost);
+  std::printf(
+      "powercut_ecc_reads: %d boots (a page the cut left with a bad ECC, read and "
+      "survived)\n",
+      step.ecc_reads + random.ecc_reads);
   return 0;
 }

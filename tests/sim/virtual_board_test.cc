@@ -346,6 +346,60 @@ TEST(VirtualBoard, KeepsAnUploadedCalibrationOverAPowerCutAndARestart) {
   EXPECT_EQ(std::filesystem::file_size(other.path), 4096u);
 }
 
+TEST(VirtualBoard, SurvivesAPowerCutDuringACalibrationSave) {
+  // A second calibration's save is cut in its erase of page B: that page's double
+  // words read back with ECC double errors (the FLASH model's NMI). The image's NMI
+  // handler takes them, the store uses page A's record, and the board says which page
+  // it could not read — instead of resetting on the NMI at every start.
+  auto bus = host::InProcessBus::Create();
+  auto board_link = bus->Connect();
+  auto host_link = bus->Connect();
+  auto upload_link = bus->Connect();
+  g474board::VirtualBoard board(Config(plant::LoadPlantParams("default")),
+                                board_link.get());
+  board.Resume();
+  host::BoardClient client(host_link.get(), 1);
+  AwaitUp(client);
+  CalibrationRecord record;
+  record.backlash.c_right = Angle::Quantize(host::DegToRad(1.1));
+  record.backlash.c_left = Angle::Quantize(host::DegToRad(-0.9));
+  record.sea_stiffness = Stiffness::Quantize(0.65);
+  std::string why;
+  const host::UploadOutcome first =
+      host::UploadCalibration(client, *upload_link, record, kUploadPatienceMs, &why);
+  ASSERT_EQ(first.status, host::UploadStatus::kAnswered) << why;
+  ASSERT_EQ(first.result, CalibrationResult::kAccepted);
+
+  board.Halt();
+  board.Post([&board] { board.chip().flash().CutPowerAfter(0, 11); });
+  board.Resume();
+  record.sea_stiffness = Stiffness::Quantize(0.7);
+  (void)host::UploadCalibration(client, *upload_link, record, 2000, &why);
+  board.Halt();
+  ASSERT_EQ(board.Summary().resets, 1) << "the cut";
+  const double cut_at = board.now_s();
+  board.RunUntil(cut_at + 1.0);
+  EXPECT_EQ(board.Summary().resets, 1) << "no reset after the cut's";
+  EXPECT_TRUE(board::LastBoot().calibration_restored);
+  EXPECT_EQ(board::LastBoot().calibration_sequence, 1u);
+  EXPECT_GT(board.chip().nmis(), 0) << "the cut page was read";
+  int infos = 0;
+  for (const CanFrame& f : Drain(*host_link)) {
+    BoardInfo info;
+    if (FunctionOf(f.id) != static_cast<std::uint8_t>(Function::kBoardInfo)) continue;
+    ASSERT_EQ(Decode(f, &info), DecodeError::kOk);
+    if (info.flash_unreadable == 0) continue;  // the start before the cut
+    ++infos;
+    EXPECT_EQ(info.flash_unreadable, flash_unreadable::kCalibrationB);
+  }
+  EXPECT_GE(infos, 1);
+  board.Stop();
+  // The cut itself is the only thing the chip logged.
+  for (const auto& v : board.violations()) {
+    EXPECT_NE(v.what.find("power cut"), std::string::npos) << v.source << ": " << v.what;
+  }
+}
+
 TEST(VirtualBoard, CalibratesAndRunsATrialAgainstPlantTruth) {
   const TempFile flash("trial.flash");
   auto bus = host::InProcessBus::Create();

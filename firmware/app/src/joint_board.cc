@@ -24,7 +24,14 @@ JointBoard::JointBoard(const JointBoardConfig& config, hal::CanPort* port,
 
 std::optional<CalibrationStore::Loaded> JointBoard::Boot() {
   if (!store_) return std::nullopt;
-  return RestoreCalibration(app_, *store_);
+  auto restored = RestoreCalibration(app_, *store_);
+  // A calibration page the flash could not read (a save cut by a power loss): the
+  // other page's record (or none) was taken; the board says so in its BoardInfo.
+  const std::uint8_t bad = store_->unreadable_pages();
+  node_.AddFlashUnreadable(static_cast<std::uint8_t>(
+      ((bad & 1u) ? protocol::flash_unreadable::kCalibrationA : 0u) |
+      ((bad & 2u) ? protocol::flash_unreadable::kCalibrationB : 0u)));
+  return restored;
 }
 
 void JointBoard::Poll() {

@@ -9,12 +9,16 @@
 //
 // Every exception goes to DefaultHandler: the bridge's enable low (it already is), and a
 // system reset. The bootloader never enables a peripheral interrupt, so the table holds
-// DefaultHandler at every IRQ position.
+// DefaultHandler at every IRQ position. The NMI first asks the flash driver whether it
+// was an ECC double error (a header or image page left half-written by a cut update):
+// then the error is recorded and the read that hit it fails, and the bootloader treats
+// the image as unreadable and stays on the bus, instead of resetting into the same read.
 #include "hal/stm32g4/startup.h"
 
 #include <array>
 #include <cstdint>
 
+#include "hal/stm32g4/flash.h"
 #include "hal/stm32g4/gpio.h"
 #include "hal/stm32g4/nvic.h"
 #include "hal/stm32g4/vector_table.h"
@@ -30,6 +34,7 @@ void __libc_init_array();
 int main();
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void DefaultHandler();
+void NmiHandler();
 }
 
 void Reset_Handler() {
@@ -43,6 +48,10 @@ void Reset_Handler() {
   __libc_init_array();
   (void)main();
   DefaultHandler();  // main never returns
+}
+
+void NmiHandler() {
+  if (!mjc::stm32g4::HandleFlashEccNmi()) DefaultHandler();
 }
 
 void DefaultHandler() {
@@ -64,8 +73,9 @@ constexpr std::array<mjc::stm32g4::IrqHandler<Handler>, 0> kNoIrqs{};
 
 extern "C" __attribute__((section(".isr_vector"),
                           used)) constinit const mjc::stm32g4::VectorTable<Handler>
-    kVectorTable = {__main_stack_top,
-                    mjc::stm32g4::BuildVectorTable(
-                        mjc::stm32g4::ResetAndFaultHandlers(Handler{&Reset_Handler},
-                                                            Handler{&DefaultHandler}),
-                        Handler{&DefaultHandler}, Handler{nullptr}, kNoIrqs)};
+    kVectorTable = {
+        __main_stack_top,
+        mjc::stm32g4::BuildVectorTable(
+            mjc::stm32g4::ResetAndFaultHandlers(
+                Handler{&Reset_Handler}, Handler{&NmiHandler}, Handler{&DefaultHandler}),
+            Handler{&DefaultHandler}, Handler{nullptr}, kNoIrqs)};

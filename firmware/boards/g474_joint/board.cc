@@ -107,6 +107,7 @@ protocol::ResetCause WireResetCause(stm32g4::ResetCause cause) {
 
 const app::JointBoard* Instance() { return g_board; }
 const BootFacts& LastBoot() { return g_boot; }
+std::uint32_t LastTickCycles() { return g_joint_io.last_tick_cycles(); }
 
 }  // namespace mjc::board
 
@@ -143,11 +144,9 @@ void Run(const RunOptions& options) {
 
   auto* flash = new (g_flash_storage) stm32g4::Stm32g4Flash(CalibrationPage(), 2);
   const bool flash_ok = flash->Init();
-  const auto identity =
-      flash_ok ? boot::IdentityStore(flash, boot::kG474Layout.identity_page_a,
-                                     boot::kG474Layout.identity_page_b)
-                     .Load()
-               : std::nullopt;
+  const boot::IdentityStore identity_store(flash, boot::kG474Layout.identity_page_a,
+                                           boot::kG474Layout.identity_page_b);
+  const auto identity = flash_ok ? identity_store.Load() : std::nullopt;
   const std::uint8_t node = identity ? identity->identity.node : options.node;
   boot::AppRegion region(flash, boot::kG474Layout);
   const auto header = flash_ok ? boot::ReadInstalledHeader(region) : std::nullopt;
@@ -170,6 +169,12 @@ void Run(const RunOptions& options) {
   config.can.identity.dirty = header ? header->dirty : build::kDirty;
   config.can.identity.reset_cause = WireResetCause(reset_cause);
   config.can.identity.instance = stm32g4::UniqueId16();
+  // An identity page the flash could not read (an ECC error a cut save left; the other
+  // page's record, or the default node, was taken): named in every BoardInfo.
+  const std::uint8_t bad_identity = identity_store.unreadable_pages();
+  config.can.identity.flash_unreadable = static_cast<std::uint8_t>(
+      ((bad_identity & 1u) ? protocol::flash_unreadable::kIdentityA : 0u) |
+      ((bad_identity & 2u) ? protocol::flash_unreadable::kIdentityB : 0u));
   g_board = new (g_board_storage)
       app::JointBoard(config, &g_can, flash_ok ? flash : nullptr, &g_boot_entry);
   if (const auto restored = g_board->Boot()) {

@@ -130,6 +130,9 @@ struct BootFacts {
   std::uint32_t calibration_sequence = 0;
 };
 const BootFacts& LastBoot();
+// The last tick's duration in core cycles (DWT CYCCNT, from its start to the end of its
+// writes): what the virtual board's figures sample.
+std::uint32_t LastTickCycles();
 
 // Any context: bridge enable low and TIM1's outputs to their idle level (low sides on).
 inline void StopBridge() { JointIo::EmergencyStop(); }

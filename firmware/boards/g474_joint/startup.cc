@@ -10,6 +10,11 @@
 // below it may have left its own), static constructors, BringUp() (the crash record
 // into the start-up report, the clock tree to 170 MHz), then main().
 //
+// The NMI goes to NmiHandler: an ECC double error of the flash (a calibration, identity
+// or header page left half-written by a cut save or update) is recorded and cleared by
+// the flash driver, and the read that hit it fails (the record store then takes the
+// other page); any other NMI stops the board as a fault does.
+//
 // Every exception and interrupt without a driver goes to DefaultHandler: the bridge's
 // enable line low and TIM1's main output off (its idle state: both low sides on, so the
 // motor is braked, not left to run on its last duty), the exception number kept in a
@@ -24,6 +29,7 @@
 #include <cstdint>
 
 #include "board.h"
+#include "hal/stm32g4/flash.h"
 #include "hal/stm32g4/mmio.h"
 #include "hal/stm32g4/nvic.h"
 #include "hal/stm32g4/regs/cortex_m4.h"
@@ -50,6 +56,7 @@ int main();
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void StartUp();
 [[noreturn]] void DefaultHandler();
+void NmiHandler();
 }
 
 namespace mjc::board {
@@ -104,6 +111,10 @@ void StartUp() {
   DefaultHandler();  // main never returns; if it did, stop as for a fault
 }
 
+void NmiHandler() {
+  if (!mjc::stm32g4::HandleFlashEccNmi()) DefaultHandler();
+}
+
 void DefaultHandler() {
   mjc::stm32g4::DisableInterrupts();
   mjc::board::StopBridge();
@@ -124,6 +135,6 @@ extern "C" __attribute__((section(".isr_vector"),
     kVectorTable = {
         __interrupt_stack_top,
         mjc::stm32g4::BuildVectorTable(
-            mjc::stm32g4::ResetAndFaultHandlers(Handler{&Reset_Handler},
-                                                Handler{&DefaultHandler}),
+            mjc::stm32g4::ResetAndFaultHandlers(
+                Handler{&Reset_Handler}, Handler{&NmiHandler}, Handler{&DefaultHandler}),
             Handler{&DefaultHandler}, Handler{nullptr}, mjc::board::kDriverIrqs)};

@@ -54,7 +54,13 @@ InstalledImage CheckInstalledImage(const AppRegion& region, const ImageTarget& t
                                    ServiceHook service) {
   InstalledImage out;
   HeaderBytes bytes{};
-  if (region.Read(0, bytes) != protocol::BootError::kNone) return out;
+  // A read the flash fails (an ECC double error left by a cut erase or program of the
+  // header page) is no image to hand over to: the bootloader stays, ready for an
+  // update, and names why.
+  if (region.Read(0, bytes) != protocol::BootError::kNone) {
+    out.check = ImageCheck::kUnreadable;
+    return out;
+  }
   out.check = DecodeHeader(bytes, &out.header);
   if (out.check != ImageCheck::kValid) return out;
   out.check = CheckHeaderFor(out.header, target);
@@ -62,7 +68,7 @@ InstalledImage CheckInstalledImage(const AppRegion& region, const ImageTarget& t
   const auto image = static_cast<std::uint32_t>(kHeaderArea);
   std::array<std::uint8_t, 8> vectors{};
   if (region.Read(image, vectors) != protocol::BootError::kNone) {
-    out.check = ImageCheck::kImageCrc;
+    out.check = ImageCheck::kUnreadable;
     return out;
   }
   out.stack_pointer = static_cast<std::uint32_t>(protocol::GetLe(&vectors[0], 4));
@@ -71,8 +77,9 @@ InstalledImage CheckInstalledImage(const AppRegion& region, const ImageTarget& t
       CheckVectors(out.stack_pointer, out.reset_handler, out.header, region.layout());
   if (out.check != ImageCheck::kValid) return out;
   std::uint32_t crc = 0;
-  if (!RegionCrc(region, image, out.header.length, service, &crc) ||
-      crc != out.header.image_crc) {
+  if (!RegionCrc(region, image, out.header.length, service, &crc)) {
+    out.check = ImageCheck::kUnreadable;
+  } else if (crc != out.header.image_crc) {
     out.check = ImageCheck::kImageCrc;
   }
   return out;

@@ -123,6 +123,8 @@ const char* ImageCheckName(ImageCheck check) {
       return "bad_vectors";
     case ImageCheck::kImageCrc:
       return "image_crc";
+    case ImageCheck::kUnreadable:
+      return "unreadable";
   }
   return "unknown";
 }

@@ -24,7 +24,10 @@ std::optional<RecordPages::Found> RecordPages::ReadPage(
   const std::size_t crc_at = kHeaderBytes + format_.payload_bytes;
   std::array<std::uint8_t, kMaxRecordBytes> buffer{};
   const std::span<std::uint8_t> b(buffer.data(), size);
-  if (flash_->Read(page, 0, b) != hal::FlashResult::kOk) return std::nullopt;
+  if (flash_->Read(page, 0, b) != hal::FlashResult::kOk) {
+    unreadable_ = static_cast<std::uint8_t>(unreadable_ | (page == pages_[0] ? 1u : 2u));
+    return std::nullopt;
+  }
   if (GetLe(&b[0], 4) != format_.magic || GetLe(&b[4], 2) != format_.version ||
       GetLe(&b[6], 2) != format_.payload_bytes ||
       GetLe(&b[crc_at + 4], 4) != format_.commit ||
@@ -40,6 +43,7 @@ std::optional<RecordPages::Found> RecordPages::ReadPage(
 std::optional<RecordPages::Found> RecordPages::Load(
     std::span<std::uint8_t> payload) const {
   std::array<std::uint8_t, kMaxPayload> a_payload{}, b_payload{};
+  unreadable_ = 0;
   const auto a = ReadPage(pages_[0], std::span(a_payload).first(format_.payload_bytes));
   const auto b = ReadPage(pages_[1], std::span(b_payload).first(format_.payload_bytes));
   const bool take_b = b && (!a || WrappingDelta(b->sequence, a->sequence) > 0);

@@ -35,21 +35,39 @@ std::uint32_t TakeErrors() {
 }
 
 // The data and instruction caches may hold the old content of a page that is erased or
-// programmed: RM0440 §5.3 (ART accelerator, "instruction/data cache"): a cache is reset
-// (ICRST/ DCRST) only while it is disabled. Both are disabled for the operation, reset
-// after it and re-enabled, as ST's HAL does for erases (FLASH_FlushCaches).
-std::uint32_t DisableCaches() {
+// programmed (RM0440 §5.3, ART accelerator, "instruction/data cache"); a cache is reset
+// (ICRST/DCRST) only while it is disabled. As ST's HAL sequences it (HAL_FLASHEx_Erase,
+// HAL_FLASH_Program, then FLASH_FlushCaches): only the data cache is off during the
+// operation — the instruction cache stays on, so the control tick, which runs from the
+// other bank meanwhile, keeps its cached code for the whole erase (up to ~40 ms) —
+// and afterwards each cache that was on is reset and re-enabled: the instruction cache
+// disabled for its reset, the data cache still off from the operation.
+std::uint32_t DisableDataCache() {
   const std::uint32_t acr = Read32(kAcr);
-  Write32(kAcr, acr & ~(flash::acr::kIcen.Bit() | flash::acr::kDcen.Bit()));
+  Write32(kAcr, acr & ~flash::acr::kDcen.Bit());
   return acr;
 }
 void ResetAndRestoreCaches(std::uint32_t acr) {
-  const std::uint32_t off =
-      Read32(kAcr) & ~(flash::acr::kIcen.Bit() | flash::acr::kDcen.Bit());
-  Write32(kAcr, off | flash::acr::kIcrst.Bit() | flash::acr::kDcrst.Bit());
-  Write32(kAcr, off);
-  Write32(kAcr, off | (acr & (flash::acr::kIcen.Bit() | flash::acr::kDcen.Bit())));
+  if (flash::acr::kIcen.IsSet(acr)) {
+    const std::uint32_t off = Read32(kAcr) & ~flash::acr::kIcen.Bit();
+    Write32(kAcr, off);
+    Write32(kAcr, off | flash::acr::kIcrst.Bit());
+    Write32(kAcr, off);
+    Write32(kAcr, off | flash::acr::kIcen.Bit());
+  }
+  if (flash::acr::kDcen.IsSet(acr)) {
+    const std::uint32_t off = Read32(kAcr) & ~flash::acr::kDcen.Bit();
+    Write32(kAcr, off | flash::acr::kDcrst.Bit());
+    Write32(kAcr, off);
+    Write32(kAcr, off | flash::acr::kDcen.Bit());
+  }
 }
+
+// The ECC double errors the NMI handler took: how many, and the last one's address.
+// Written only by the NMI (HandleFlashEccNmi), read by the calls below around their
+// loads (volatile: the NMI lands between two of their instructions).
+volatile std::uint32_t g_ecc_errors = 0;
+volatile std::uint32_t g_ecc_address = 0;
 
 FlashResult Finish(std::uint32_t clear_bits, std::uint32_t acr, bool done) {
   const std::uint32_t errors = TakeErrors();
@@ -80,7 +98,7 @@ FlashResult Stm32g4Flash::DoErasePage(std::uint32_t page) {
   // its bank (BKER: bank 2 in dual-bank mode), then STRT, wait BSY = 0, clear PER.
   if (!WaitNotBusy() || !Unlock()) return FlashResult::kHardwareError;
   (void)TakeErrors();
-  const std::uint32_t acr = DisableCaches();
+  const std::uint32_t acr = DisableDataCache();
   const std::uint32_t bank = page / kPagesPerBank;
   const std::uint32_t cr = flash::cr::kPer.Bit() |
                            flash::cr::kPnb.Value(page % kPagesPerBank) |
@@ -100,16 +118,19 @@ FlashResult Stm32g4Flash::DoProgram(std::uint32_t page, std::uint32_t offset,
   if (!Writable(page))
     return geometry_ok_ ? FlashResult::kBadAddress : FlashResult::kHardwareError;
   const Address address = PageAddress(page) + offset;
-  // Only an erased double-word may be programmed (its ECC is written once).
-  if (Read32(address) != 0xFFFFFFFFu || Read32(address + 4) != 0xFFFFFFFFu) {
-    return FlashResult::kNotErased;
-  }
+  // Only an erased double-word may be programmed (its ECC is written once). A double
+  // word left corrupt by a cut erase or program reads with an ECC error: the NMI took
+  // it, and the page must be erased first.
+  const std::uint32_t ecc_before = g_ecc_errors;
+  const std::uint32_t low = Read32(address), high = Read32(address + 4);
+  if (g_ecc_errors != ecc_before) return FlashResult::kHardwareError;
+  if (low != 0xFFFFFFFFu || high != 0xFFFFFFFFu) return FlashResult::kNotErased;
   // RM0440 §5.3.8 "Flash main memory programming sequences", standard programming: BSY
   // = 0, errors cleared, PG = 1, the double-word as two 32-bit writes (low word at the
   // 8-aligned address first), wait BSY = 0, check the flags, PG = 0.
   if (!WaitNotBusy() || !Unlock()) return FlashResult::kHardwareError;
   (void)TakeErrors();
-  const std::uint32_t acr = DisableCaches();
+  const std::uint32_t acr = DisableDataCache();
   Write32(kCr, flash::cr::kPg.Bit());
   Write32(address, static_cast<std::uint32_t>(value));
   InstructionSyncBarrier();
@@ -123,7 +144,9 @@ FlashResult Stm32g4Flash::DoRead(std::uint32_t page, std::uint32_t offset,
   if (page >= kPages || offset > kPageSize || out.size() > kPageSize - offset) {
     return FlashResult::kBadAddress;
   }
-  // Aligned 32-bit reads, bytes taken little-endian.
+  // Aligned 32-bit reads, bytes taken little-endian. A double word with an ECC double
+  // error raises the NMI, whose handler counts it: the read fails.
+  const std::uint32_t ecc_before = g_ecc_errors;
   const Address start = PageAddress(page) + offset;
   for (std::size_t i = 0; i < out.size();) {
     const Address a = static_cast<Address>(start + i);
@@ -132,7 +155,25 @@ FlashResult Stm32g4Flash::DoRead(std::uint32_t page, std::uint32_t offset,
       out[i] = static_cast<std::uint8_t>(word >> (8 * b));
     }
   }
-  return FlashResult::kOk;
+  return g_ecc_errors == ecc_before ? FlashResult::kOk : FlashResult::kHardwareError;
 }
+
+bool HandleFlashEccNmi() {
+  const Address eccr = flash::kBase + flash::kEccr;
+  const std::uint32_t v = Read32(eccr);
+  if (!flash::eccr::kEccd.IsSet(v)) return false;
+  const std::uint32_t bank_offset =
+      flash::eccr::kBkEcc.IsSet(v)
+          ? Stm32g4Flash::kPagesPerBank * flash::kDualBankPageBytes
+          : 0u;
+  g_ecc_address = flash::kMainMemory + bank_offset + flash::eccr::kAddrEcc.Get(v);
+  // ECCD is cleared by writing 1; ECCC (also write-1) is left as it is, ECCCIE kept.
+  Write32(eccr, (v & flash::eccr::kEcccie.Bit()) | flash::eccr::kEccd.Bit());
+  g_ecc_errors = g_ecc_errors + 1u;
+  return true;
+}
+
+std::uint32_t FlashEccErrors() { return g_ecc_errors; }
+std::uint32_t LastFlashEccAddress() { return g_ecc_address; }
 
 }  // namespace mjc::stm32g4

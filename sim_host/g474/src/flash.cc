@@ -38,6 +38,7 @@ Flash::Flash(ViolationLog* log, FlashConfig config)
     : log_(log),
       config_(std::move(config)),
       memory_(kSize, 0xFF),
+      ecc_bad_(kSize / 8),
       options_(log, config_.option_program_time) {
   if (!config_.path.empty()) {
     bool keep = true, fresh = true;
@@ -58,12 +59,63 @@ Flash::Flash(ViolationLog* log, FlashConfig config)
     if (keep) file_ = ::open(config_.path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fresh) Save(0, kSize);
     options_.Persist(file_, kSize);
+    if (file_ >= 0) {
+      // The corrupt double words beside the array: a bit each (a missing file or one
+      // of another size: none corrupt).
+      const std::string ecc_path = config_.path + ".ecc";
+      std::ifstream ecc_in(ecc_path, std::ios::binary);
+      if (ecc_in && !fresh) {
+        std::vector<std::uint8_t> bits((std::istreambuf_iterator<char>(ecc_in)),
+                                       std::istreambuf_iterator<char>());
+        if (bits.size() == ecc_bad_.size() / 8) {
+          for (std::size_t i = 0; i < ecc_bad_.size(); ++i)
+            ecc_bad_[i] = ((bits[i / 8] >> (i % 8)) & 1u) != 0;
+        }
+      }
+      ecc_file_ = ::open(ecc_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+      SaveEcc();
+    }
   }
   Reset();
 }
 
 Flash::~Flash() {
   if (file_ >= 0) ::close(file_);
+  if (ecc_file_ >= 0) ::close(ecc_file_);
+}
+
+void Flash::SaveEcc() const {
+  if (ecc_file_ < 0) return;
+  std::vector<std::uint8_t> bits(ecc_bad_.size() / 8, 0);
+  for (std::size_t i = 0; i < ecc_bad_.size(); ++i) {
+    if (ecc_bad_[i])
+      bits[i / 8] = static_cast<std::uint8_t>(bits[i / 8] | (1u << (i % 8)));
+  }
+  const std::uint8_t* p = bits.data();
+  std::size_t left = bits.size();
+  off_t at = 0;
+  while (left > 0) {
+    const ssize_t n = ::pwrite(ecc_file_, p, left, at);
+    if (n <= 0) return;  // a full disk: the state in memory stays right
+    p += n, at += n, left -= static_cast<std::size_t>(n);
+  }
+}
+
+void Flash::SetEcc(std::uint32_t offset, std::uint32_t bytes, bool corrupt) {
+  bool changed = false;
+  for (std::uint32_t dw = offset / 8; dw < (offset + bytes) / 8; ++dw) {
+    if (ecc_bad_[dw] != corrupt) {
+      ecc_bad_[dw] = corrupt;
+      changed = true;
+    }
+  }
+  if (changed) SaveEcc();
+}
+
+long Flash::corrupt_double_words() const {
+  long n = 0;
+  for (const bool b : ecc_bad_) n += b ? 1 : 0;
+  return n;
 }
 
 void Flash::Save(std::uint32_t offset, std::uint32_t bytes) const {
@@ -82,6 +134,8 @@ void Flash::Reset() {
   // ACR reset value from the SVD (0x00040601: LATENCY = 1, ICEN, DCEN, DBG_SWEN).
   acr_ = 0x00040601u;
   sr_ = 0;
+  eccr_ = 0;
+  nmi_ = false;
   cr_ = kLock | kOptlock;
   options_.Reset();  // FLASH_OPTR: the option bytes loaded last
   if (options_.load_error()) sr_ |= kOptverr;
@@ -136,6 +190,10 @@ void Flash::Complete() {
     std::memcpy(p, &op_.value, 8);  // little-endian, as the Cortex-M4 stores it
   }
   Save(op_.offset, op_.length);
+  // A whole erase writes every cell and ECC bit anew; a program over a corrupt double
+  // word is only accepted with all zeros (WriteMemory), which clears every data and
+  // ECC bit: either way the double words match their ECC again.
+  SetEcc(op_.offset, op_.length, false);
   op_ = Operation{};
   if (cr_ & (1u << 24)) sr_ |= kEop;  // EOP only when EOPIE is set
 }
@@ -153,6 +211,8 @@ void Flash::Interrupt() {
     std::memcpy(p, &mixed, 8);
   }
   Save(op_.offset, op_.length);
+  // The ECC bits were cut with the data: they no longer match it.
+  SetEcc(op_.offset, op_.length, true);
   op_ = Operation{};
 }
 
@@ -192,7 +252,7 @@ RegisterTable<Flash> Flash::Registers() {
       R::Fixed(0x0C),  // OPTKEYR: write-only
       R::ClearByWriting1(0x10, &Flash::sr_, kSrW1c),
       R::ReadWrite(0x14, &Flash::cr_),
-      R::Fixed(0x18),  // ECCR: no ECC errors modelled
+      R::ReadOnly(0x18, &Flash::eccr_),  // written through Write
       // 0x20 FLASH_OPTR: OptionBytes (see Read and Write).
       R::Fixed(0x24, 0xFFFF0000u),
       R::Fixed(0x28),
@@ -364,6 +424,11 @@ bool Flash::Write(const Access& a) {
       log_->Report(now_, "FLASH", "CR.STRT with neither PER nor MER1/MER2: nothing done");
       return true;
     }
+    case 0x18:
+      // ECCCIE read-write; ECCC and ECCD cleared by writing 1; the rest read-only.
+      eccr_ = (eccr_ & ~kEcccie) | (v & kEcccie);
+      eccr_ &= ~(v & (kEccc | kEccd));
+      return true;
     case OptionBytes::kOffset:
       options_.Write(a, (cr_ & kOptlock) != 0, now_);
       return true;
@@ -400,6 +465,17 @@ bool Flash::ReadMemory(std::uint32_t address, unsigned bytes, std::uint32_t* val
     // Reading the bank being written stalls the bus until the operation ends.
     stall_until_ = op_.end < op_.cut_at ? op_.end : op_.cut_at;
     return false;  // the chip advances time and retries
+  }
+  if (ecc_bad_[offset / 8]) {
+    // A double error: the data go out as read, ECCD and the NMI report it. ADDR_ECC and
+    // BK_ECC keep the first error's place until the flags are cleared.
+    ++ecc_detections_;
+    if ((eccr_ & (kEccc | kEccd)) == 0) {
+      const std::uint32_t in_bank = (offset % (kSize / 2)) & ~7u;
+      eccr_ = (eccr_ & kEcccie) | (BankOf(offset) == 1 ? kBkEcc : 0u) | in_bank;
+    }
+    eccr_ |= kEccd;
+    nmi_ = true;
   }
   std::uint32_t v = 0;
   std::memcpy(&v, &memory_[offset], bytes);

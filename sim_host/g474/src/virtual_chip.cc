@@ -436,6 +436,7 @@ std::uint32_t VirtualChip::Read(stm32g4::Address address, unsigned bytes) {
     }
     if (!ok) log_.Report(now_, "bus", "read at " + Hex(address) + " outside the flash");
     Settle(*route);
+    TakeFlashNmi();
     ServiceInterrupts();
     return value;
   }
@@ -661,6 +662,29 @@ void VirtualChip::WaitForInterrupt() {
   }
 }
 
+void VirtualChip::TakeFlashNmi() {
+  if (!flash_.TakeNmi()) return;
+  // An NMI within the NMI handler stays pending until it returns (no re-entry); the
+  // handler that reads a corrupt double word itself is not modelled further.
+  if (in_nmi_) return;
+  ++nmis_;
+  if (!nmi_handler_) {
+    log_.Report(now_, "NVIC",
+                "NMI (flash ECC double error, ECCR " + Hex(flash_.eccr()) +
+                    ") with no NMI handler: the default handler resets the chip");
+    DoReset(ResetCause::kSoftware);
+    return;
+  }
+  in_nmi_ = true;
+  struct Exit {
+    bool* flag;
+    ~Exit() { *flag = false; }
+  } exit{&in_nmi_};
+  SpendCycles(config_.exception_cycles);
+  nmi_handler_();
+  SpendCycles(config_.exception_cycles);
+}
+
 // ── Resets ────────────────────────────────────────────────────────────────────────
 
 void VirtualChip::PowerCut() {
@@ -698,6 +722,7 @@ void VirtualChip::DoReset(ResetCause cause) {
   cortex_.Reset();
   rules_.Reset();
   active_stack_.clear();
+  in_nmi_ = false;
   primask_ = false;
   cycle_remainder_ = 0;
   SampleBoot();

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "board.h"
+#include "hal/stm32g4/flash.h"
 #include "hal/stm32g4/mmio.h"
 #include "interrupts.h"
 
@@ -131,6 +132,9 @@ VirtualBoard::VirtualBoard(const VirtualBoardConfig& config, host::CanLink* link
       chip_->SetHandler(entry.irq, entry.handler);
     }
   }
+  // The NMI as the image's NmiHandler takes it (startup.cc): a flash ECC double error
+  // recorded by the flash driver (the model raises no other NMI).
+  chip_->SetNmiHandler([] { (void)stm32g4::HandleFlashEccNmi(); });
   chip_->AttachEncoder(kEncoderA, kEncoderB);
   chip_->AttachAs5047p(kJointEncoder).SetAngleSource([this] {
     return JointSample(plant_->JointFrame());

@@ -12,8 +12,11 @@
 namespace mjc::hal {
 
 SimFlash::SimFlash(std::uint32_t pages, std::string path, std::string* why)
-    : pages_(pages), memory_(static_cast<std::size_t>(pages) * kPageSize, 0xFF) {
+    : pages_(pages),
+      memory_(static_cast<std::size_t>(pages) * kPageSize, 0xFF),
+      ecc_bad_(memory_.size() / kDoubleWord) {
   if (path.empty()) return;
+  const std::string ecc_path = path + ".ecc";
   const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd < 0) {
     if (why != nullptr) *why = path + ": " + std::strerror(errno) + ": not kept";
@@ -29,6 +32,8 @@ SimFlash::SimFlash(std::uint32_t pages, std::string path, std::string* why)
   if (size == 0) {  // a new file: the whole chip, erased
     file_.fd = fd;
     Save(0, memory_.size());
+    ecc_file_.fd = ::open(ecc_path.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    SaveEcc();
     return;
   }
   if (size != memory_.size()) {
@@ -53,6 +58,63 @@ SimFlash::SimFlash(std::uint32_t pages, std::string path, std::string* why)
     done += static_cast<std::size_t>(n);
   }
   file_.fd = fd;
+  // The corrupt double words, when the file beside it has the right size (none else).
+  ecc_file_.fd = ::open(ecc_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (ecc_file_.fd >= 0) {
+    std::vector<std::uint8_t> bits(ecc_bad_.size() / 8);
+    if (::pread(ecc_file_.fd, bits.data(), bits.size(), 0) ==
+        static_cast<ssize_t>(bits.size())) {
+      for (std::size_t i = 0; i < ecc_bad_.size(); ++i)
+        ecc_bad_[i] = ((bits[i / 8] >> (i % 8)) & 1u) != 0;
+    }
+    SaveEcc();
+  }
+}
+
+void SimFlash::SaveEcc() {
+  if (ecc_file_.fd < 0) return;
+  std::vector<std::uint8_t> bits(ecc_bad_.size() / 8, 0);
+  for (std::size_t i = 0; i < ecc_bad_.size(); ++i) {
+    if (ecc_bad_[i])
+      bits[i / 8] = static_cast<std::uint8_t>(bits[i / 8] | (1u << (i % 8)));
+  }
+  std::size_t done = 0;
+  while (done < bits.size()) {
+    const ssize_t n = ::pwrite(ecc_file_.fd, bits.data() + done, bits.size() - done,
+                               static_cast<off_t>(done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      ++file_errors_;
+      return;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+void SimFlash::SetEcc(std::size_t offset, std::size_t bytes, bool corrupt) {
+  bool changed = false;
+  for (std::size_t dw = offset / kDoubleWord; dw < (offset + bytes) / kDoubleWord; ++dw) {
+    if (ecc_bad_[dw] != corrupt) {
+      ecc_bad_[dw] = corrupt;
+      changed = true;
+    }
+  }
+  if (changed) SaveEcc();
+}
+
+bool SimFlash::AnyCorrupt(std::size_t offset, std::size_t bytes) const {
+  if (bytes == 0) return false;
+  for (std::size_t dw = offset / kDoubleWord; dw <= (offset + bytes - 1) / kDoubleWord;
+       ++dw) {
+    if (ecc_bad_[dw]) return true;
+  }
+  return false;
+}
+
+long SimFlash::corrupt_double_words() const {
+  long n = 0;
+  for (const bool b : ecc_bad_) n += b ? 1 : 0;
+  return n;
 }
 
 SimFlash::MirrorFile::~MirrorFile() {
@@ -114,10 +176,12 @@ FlashResult SimFlash::DoErasePage(std::uint32_t page) {
   if (Interrupted()) {
     for (std::size_t i = 0; i < kPageSize; ++i) p[i] = static_cast<std::uint8_t>(rng_());
     Save(at, kPageSize);
+    SetEcc(at, kPageSize, true);
     return FlashResult::kHardwareError;
   }
   std::memset(p, 0xFF, kPageSize);
   Save(at, kPageSize);
+  SetEcc(at, kPageSize, false);
   return FlashResult::kOk;
 }
 
@@ -129,6 +193,10 @@ FlashResult SimFlash::DoProgram(std::uint32_t page, std::uint32_t offset,
   }
   const std::size_t at = static_cast<std::size_t>(page) * kPageSize + offset;
   std::uint8_t* p = &memory_[at];
+  if (AnyCorrupt(at, kDoubleWord)) {  // the erased-check's read takes the ECC error
+    ++ecc_errors_;
+    return FlashResult::kHardwareError;
+  }
   std::uint64_t old = 0;
   std::memcpy(&old, p, sizeof old);
   if (old != ~std::uint64_t{0}) return FlashResult::kNotErased;
@@ -137,6 +205,7 @@ FlashResult SimFlash::DoProgram(std::uint32_t page, std::uint32_t offset,
     const std::uint64_t garbage = (value & mask) | (old & ~mask);
     std::memcpy(p, &garbage, sizeof garbage);
     Save(at, kDoubleWord);
+    SetEcc(at, kDoubleWord, true);
     return FlashResult::kHardwareError;
   }
   std::memcpy(p, &value, sizeof value);  // little-endian, as on the Cortex-M4
@@ -147,8 +216,12 @@ FlashResult SimFlash::DoProgram(std::uint32_t page, std::uint32_t offset,
 FlashResult SimFlash::DoRead(std::uint32_t page, std::uint32_t offset,
                              std::span<std::uint8_t> out) const {
   if (page >= pages_ || offset + out.size() > kPageSize) return FlashResult::kBadAddress;
-  std::memcpy(out.data(), &memory_[static_cast<std::size_t>(page) * kPageSize + offset],
-              out.size());
+  const std::size_t at = static_cast<std::size_t>(page) * kPageSize + offset;
+  std::memcpy(out.data(), &memory_[at], out.size());
+  if (AnyCorrupt(at, out.size())) {
+    ++ecc_errors_;
+    return FlashResult::kHardwareError;
+  }
   return FlashResult::kOk;
 }
 

@@ -28,7 +28,8 @@ bool Same(const protocol::CalibrationRecord& a, const protocol::CalibrationRecor
          a.fitted_at_unix_s == b.fitted_at_unix_s;
 }
 
-bool SurvivesCut(int history, long cut, std::uint64_t seed, bool* got_new) {
+bool SurvivesCut(int history, long cut, std::uint64_t seed, bool* got_new,
+                 bool* ecc_read) {
   SimFlash flash(8);
   CalibrationStore store(&flash, kPageA, kPageB);
   for (int i = 0; i < history; ++i) {
@@ -37,11 +38,25 @@ bool SurvivesCut(int history, long cut, std::uint64_t seed, bool* got_new) {
   flash.CutPowerAfter(cut, seed);
   const StoreResult result = store.Save(Record(history));
   flash.PowerOn();
-  const auto loaded = CalibrationStore(&flash, kPageA, kPageB).Load();
+  const long ecc_before = flash.ecc_errors();
+  CalibrationStore rebooted(&flash, kPageA, kPageB);
+  const auto loaded = rebooted.Load();
+  *ecc_read = flash.ecc_errors() > ecc_before;
+  if (*ecc_read != (rebooted.unreadable_pages() != 0)) return false;  // named as met
   *got_new = loaded && Same(loaded->record, Record(history));
-  if (result == StoreResult::kOk) return *got_new;  // the cut came after the save
-  if (history == 0) return !loaded || *got_new;     // nothing before: nothing or the new
-  return loaded && (*got_new || Same(loaded->record, Record(history - 1)));
+  bool kept = false;
+  if (result == StoreResult::kOk) {
+    kept = *got_new;  // the cut came after the save
+  } else if (history == 0) {
+    kept = !loaded || *got_new;  // nothing before: nothing or the new
+  } else {
+    kept = loaded && (*got_new || Same(loaded->record, Record(history - 1)));
+  }
+  if (!kept) return false;
+  // The next save goes over whatever the cut damaged.
+  if (rebooted.Save(Record(history + 1)) != StoreResult::kOk) return false;
+  const auto after = CalibrationStore(&flash, kPageA, kPageB).Load();
+  return after && Same(after->record, Record(history + 1));
 }
 
 Sweep EveryStep() {
@@ -49,10 +64,11 @@ Sweep EveryStep() {
   for (int history : {0, 1, 2}) {  // erased flash, one valid page, both pages valid
     for (long cut = 0; cut <= 10; ++cut) {
       for (std::uint64_t seed = 1; seed <= 8; ++seed) {
-        bool got_new = false;
+        bool got_new = false, ecc_read = false;
         ++s.points;
-        if (!SurvivesCut(history, cut, seed, &got_new)) ++s.lost;
+        if (!SurvivesCut(history, cut, seed, &got_new, &ecc_read)) ++s.lost;
         if (got_new) ++s.completed_new;
+        if (ecc_read) ++s.ecc_reads;
       }
     }
   }
@@ -65,10 +81,11 @@ Sweep RandomPoints() {
   for (int trial = 0; trial < 2000; ++trial) {
     const int history = static_cast<int>(rng() % 6);
     const long cut = static_cast<long>(rng() % 11);
-    bool got_new = false;
+    bool got_new = false, ecc_read = false;
     ++s.points;
-    if (!SurvivesCut(history, cut, rng(), &got_new)) ++s.lost;
+    if (!SurvivesCut(history, cut, rng(), &got_new, &ecc_read)) ++s.lost;
     if (got_new) ++s.completed_new;
+    if (ecc_read) ++s.ecc_reads;
   }
   return s;
 }

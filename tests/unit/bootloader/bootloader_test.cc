@@ -155,6 +155,53 @@ TEST(BootDecision, NoImageOrABadOneStaysAndSaysWhy) {
   }
 }
 
+TEST(BootDecision, AHeaderTheFlashCannotReadIsNoImageAndTheNextUpdateMends) {
+  // An update cut while it programmed the header's double words (the STM32G4 leaves
+  // the cut double word with an ECC double error; the simulated flash fails its read,
+  // as the G474 driver does once its NMI handler took the error).
+  const auto file = MakeFile(MakeImage(3000, 21));
+  long operations = 0;
+  {
+    SimFlash count(kPages);
+    SpyFlash spy(&count);
+    BootHandoff handoff = ZeroHandoff();
+    Board board(&spy, &handoff);
+    (void)board.Start();
+    HostUpdate host;
+    ASSERT_TRUE(host.Run(board, file));
+    operations = static_cast<long>(spy.ops.size());
+  }
+  SimFlash flash(kPages);
+  BootHandoff handoff = ZeroHandoff();
+  {
+    flash.CutPowerAfter(operations - 1, 3);  // the header's last double word
+    Board board(&flash, &handoff);
+    (void)board.Start();
+    HostUpdate host;
+    EXPECT_FALSE(host.Run(board, file));
+    flash.PowerOn();
+  }
+  std::array<std::uint8_t, 8> dw{};
+  ASSERT_EQ(flash.Read(8, 120, dw), hal::FlashResult::kHardwareError);
+  {
+    Board board(&flash, &handoff);
+    EXPECT_EQ(board.Start(), BootAction::kNone);
+    EXPECT_EQ(board.boot.state(), BootState::kReady);
+    EXPECT_EQ(board.boot.reason(), StayReason::kNoValidImage);
+    EXPECT_EQ(board.boot.error(), BootError::kUnreadable);
+    const auto status = board.Take<protocol::BootStatus>();
+    ASSERT_FALSE(status.empty());
+    EXPECT_EQ(status.back().error, BootError::kUnreadable);
+    // On the bus and ready: the update goes through (its Begin erases the header's
+    // page first) and the image boots.
+    HostUpdate host;
+    ASSERT_TRUE(host.Run(board, file));
+  }
+  Board board(&flash, &handoff);
+  (void)board.Start();
+  EXPECT_EQ(board.boot.state(), BootState::kHoldWindow);
+}
+
 // ---- the stay request ----------------------------------------------------------------
 
 TEST(StayRequest, CountsOnceAndOnlyAfterASoftwareReset) {

@@ -39,6 +39,8 @@ class World {
   // Every rule of the reference manual the driver broke, other than the cuts, and
   // anything else that went wrong in the world itself.
   virtual std::string Violations() { return ""; }
+  // Reads so far that found an ECC double error.
+  virtual long EccErrors() = 0;
 };
 
 std::vector<std::uint8_t> OutsideOf(const std::vector<std::uint8_t>& all) {
@@ -83,6 +85,7 @@ class SimWorld final : public World {
     sim_.CutPowerAfter(count, seed);
   }
   void PowerOn() override { sim_.PowerOn(); }
+  long EccErrors() override { return sim_.ecc_errors(); }
   std::vector<std::uint8_t> Outside() override {
     std::vector<std::uint8_t> all(256 * 2048);
     for (std::uint32_t p = 0; p < 256; ++p) {
@@ -99,6 +102,9 @@ class ChipWorld final : public World {
  public:
   ChipWorld() {
     stm32g4::BindRegisterSpace(&chip_);
+    // The NMI as the bootloader image's NmiHandler takes it
+    // (firmware/boards/g474_bootloader/startup.cc).
+    chip_.SetNmiHandler([] { (void)stm32g4::HandleFlashEccNmi(); });
     FillOutside(chip_.flash().mutable_contents());
     PowerOn();
   }
@@ -125,6 +131,7 @@ class ChipWorld final : public World {
   std::vector<std::uint8_t> Outside() override {
     return OutsideOf(chip_.flash().contents());
   }
+  long EccErrors() override { return chip_.flash().ecc_detections(); }
   bool Powered(const std::function<void()>& body) override {
     try {
       body();
@@ -233,21 +240,35 @@ bool TornCommit(World& world, std::span<const std::uint8_t> old_file,
 // One trial: the board holds `old_file` (or nothing), the host updates it to
 // `new_file`, and power fails at each of `cuts` in turn (each counted from the start
 // of an update attempt). Returns the reason when the rule broke, "" when it held.
+// `*ecc_read`: whether the board's own reads (its power-ups and updates, not this
+// rig's checks) found an ECC double error the cuts left.
 std::string Trial(World& world, std::span<const std::uint8_t> old_file,
                   std::span<const std::uint8_t> new_file, const std::vector<long>& cuts,
-                  std::uint64_t seed) {
+                  std::uint64_t seed, bool* ecc_read) {
   std::mt19937_64 rng(seed);
+  long board_ecc = 0;  // ECC errors the board's reads found
+  const auto board = [&](const auto& run) {
+    const long before = world.EccErrors();
+    auto r = run();
+    board_ecc += world.EccErrors() - before;
+    return r;
+  };
+  struct Done {
+    ~Done() { *flag = *count > 0; }
+    bool* flag;
+    long* count;
+  } done{ecc_read, &board_ecc};
   if (!old_file.empty()) world.Install(old_file);
   const auto outside = world.Outside();
   bool updated = false;
   for (const long cut : cuts) {
     world.CutPowerAfter(cut, rng());
-    updated = Update(world, new_file);
+    updated = board([&] { return Update(world, new_file); });
     world.PowerOn();
     if (TornCommit(world, old_file, new_file)) {
       return "a header that checks out in front of an image that is not whole";
     }
-    const Boot boot = PowerUp(world, rng);
+    const Boot boot = board([&] { return PowerUp(world, rng); });
     if (!boot.powered) return "the power-up after the cut lost power";
     if (boot.handed_over) {
       const bool is_new = Whole(world, new_file);
@@ -266,8 +287,9 @@ std::string Trial(World& world, std::span<const std::uint8_t> old_file,
   }
   if (!updated) {
     // Staying: the bootloader must take the image again, and then start it.
-    if (!Update(world, new_file)) return "the bootloader did not take the image again";
-    const Boot boot = PowerUp(world, rng);
+    if (!board([&] { return Update(world, new_file); }))
+      return "the bootloader did not take the image again";
+    const Boot boot = board([&] { return PowerUp(world, rng); });
     if (!boot.powered || !boot.handed_over || !Whole(world, new_file)) {
       return "after the complete update the new image does not boot";
     }
@@ -282,8 +304,9 @@ template <class MakeWorld>
 PowerCutSweep PowerCuts(MakeWorld make_world, int random, std::size_t step_bytes,
                         std::size_t max_random_bytes) {
   PowerCutSweep sweep;
-  const auto note = [&](const std::string& why, const std::string& where) {
+  const auto note = [&](const std::string& why, const std::string& where, bool ecc_read) {
     ++sweep.points;
+    if (ecc_read) ++sweep.ecc_reads;
     if (why.empty()) return;
     ++sweep.bricked;
     if (sweep.first_failure.empty()) sweep.first_failure = where + ": " + why;
@@ -292,19 +315,21 @@ PowerCutSweep PowerCuts(MakeWorld make_world, int random, std::size_t step_bytes
   const auto new_file = MakeFile(MakeImage(step_bytes, 102));
   const long steps = OperationsOf(new_file);
   if (steps < 0) {
-    note("the update without a cut did not complete", "counting its operations");
+    note("the update without a cut did not complete", "counting its operations", false);
     return sweep;
   }
   for (long cut = 0; cut <= steps; ++cut) {  // `steps`: the cut comes after the end
     for (int with_old = 0; with_old < 2; ++with_old) {
       auto world = make_world();
+      bool ecc_read = false;
       std::string why =
           Trial(*world,
                 with_old ? std::span<const std::uint8_t>(old_file)
                          : std::span<const std::uint8_t>(),
-                new_file, {cut}, 1000u * static_cast<std::uint64_t>(cut) + 7u);
+                new_file, {cut}, 1000u * static_cast<std::uint64_t>(cut) + 7u, &ecc_read);
       if (why.empty()) why = world->Violations();
-      note(why, "step " + std::to_string(cut) + (with_old ? " over an old image" : ""));
+      note(why, "step " + std::to_string(cut) + (with_old ? " over an old image" : ""),
+           ecc_read);
     }
   }
   std::mt19937_64 rng(0xF1A5'0000u + static_cast<std::uint64_t>(step_bytes));
@@ -316,17 +341,18 @@ PowerCutSweep PowerCuts(MakeWorld make_world, int random, std::size_t step_bytes
     const long ops = OperationsOf(b);
     if (ops < 0) {
       note("the update without a cut did not complete",
-           "random trial " + std::to_string(trial));
+           "random trial " + std::to_string(trial), false);
       continue;
     }
     std::vector<long> cuts(1 + rng() % 3);
     for (long& c : cuts)
       c = static_cast<long>(rng() % static_cast<std::uint64_t>(ops + 2));
     auto world = make_world();
+    bool ecc_read = false;
     std::string why = Trial(*world, rng() % 4 == 0 ? std::span<const std::uint8_t>() : a,
-                            b, cuts, rng());
+                            b, cuts, rng(), &ecc_read);
     if (why.empty()) why = world->Violations();
-    note(why, "random trial " + std::to_string(trial));
+    note(why, "random trial " + std::to_string(trial), ecc_read);
   }
   return sweep;
 }

@@ -2,8 +2,10 @@
 // the bytes on the page are the documented layout (the CRC checked against zlib's
 // crc32, an implementation we did not write), saves alternate pages with a growing
 // sequence, the newest valid page wins, and a page the caller does not accept or whose
-// commit mark is missing is passed over. Power cuts at every step are swept through
-// both stores (identity_store_test.cc, tests/unit/app's calibration power-cut rig).
+// commit mark is missing is passed over, and so is a page the flash cannot read (an ECC
+// error a cut left), which the next save erases. Power cuts at every step are swept
+// through both stores (identity_store_test.cc, tests/unit/app's calibration power-cut
+// rig).
 #include "mjc/boot/record_pages.h"
 
 #include <gtest/gtest.h>
@@ -126,6 +128,43 @@ TEST(RecordPages, APageWithoutItsCommitMarkDoesNotCount) {
   ASSERT_TRUE(found);
   EXPECT_EQ(found->page, kA);
   EXPECT_EQ(out, Numbered(1));
+}
+
+}  // namespace
+
+namespace {
+
+TEST(RecordPages, AnUnreadablePageLosesToTheOtherAndIsErasedByTheNextSave) {
+  // Two records (A: 1, B: 2), then a save of 3 into A cut in its first program: A's
+  // erase completed, its first double word now reads as an ECC double error (the flash
+  // fails the read, as the G4 image's driver does after the NMI).
+  SimFlash flash(16);
+  RecordPages pages(&flash, kA, kB, kFormat, NotFf);
+  ASSERT_EQ(pages.Save(Numbered(1)), RecordResult::kOk);
+  ASSERT_EQ(pages.Save(Numbered(2)), RecordResult::kOk);
+  flash.CutPowerAfter(1, 5);  // the erase of A completes, its first program is cut
+  EXPECT_EQ(pages.Save(Numbered(3)), RecordResult::kFlashError);
+  flash.PowerOn();
+  std::array<std::uint8_t, 8> first{};
+  ASSERT_EQ(flash.Read(kA, 0, first), FlashResult::kHardwareError);
+
+  RecordPages rebooted(&flash, kA, kB, kFormat, NotFf);
+  Payload got{};
+  const auto found = rebooted.Load(got);
+  ASSERT_TRUE(found);
+  EXPECT_EQ(found->page, kB);
+  EXPECT_EQ(got, Numbered(2));
+  EXPECT_EQ(rebooted.unreadable(), 1u) << "page A named";
+
+  // The next save goes to A (B holds the newest valid record): erased, readable again.
+  ASSERT_EQ(rebooted.Save(Numbered(4)), RecordResult::kOk);
+  EXPECT_EQ(flash.Read(kA, 0, first), FlashResult::kOk);
+  RecordPages again(&flash, kA, kB, kFormat, NotFf);
+  const auto after = again.Load(got);
+  ASSERT_TRUE(after);
+  EXPECT_EQ(after->page, kA);
+  EXPECT_EQ(got, Numbered(4));
+  EXPECT_EQ(again.unreadable(), 0u);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 // FLASH against RM0440 §5: the key sequence and its lock, erase/program rules and
-// their error flags, busy times, power cuts (seeded).
+// their error flags, busy times, power cuts (seeded), and the ECC double errors a cut
+// leaves (FLASH_ECCR bit positions from ST's CMSIS header stm32g474xx.h: ADDR_ECC 18:0,
+// BK_ECC 21, ECCD 31).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -15,7 +17,8 @@ namespace {
 using namespace mjc::g474model;
 
 constexpr std::uint32_t kF = 0x40022000, kKeyr = kF + 0x08, kSr = kF + 0x10,
-                        kCr = kF + 0x14;
+                        kCr = kF + 0x14, kEccr = kF + 0x18;
+constexpr std::uint32_t kEccd = 0x80000000u, kBkEcc = 0x00200000u;
 
 void Unlock(VirtualChip& c) {
   c.Write(kKeyr, Flash::kKey1, 4);
@@ -133,6 +136,7 @@ TEST(G474Flash, PowerCutDuringProgramLeavesAMixAndResetsTheChip) {
   VirtualChip c;
   std::optional<ResetCause> cause;
   c.SetResetHandler([&](ResetCause rc) { cause = rc; });
+  c.SetNmiHandler([] {});  // the cut double word reads with an ECC error
   Unlock(c);
   c.flash().CutPowerAfter(0, 42);
   c.Write(kCr, 1u, 4);
@@ -145,6 +149,90 @@ TEST(G474Flash, PowerCutDuringProgramLeavesAMixAndResetsTheChip) {
   EXPECT_NE(lo & hi, 0xFFFFFFFFu);           // some bits made it
   EXPECT_NE(lo | hi, 0u);                    // not all of them
   EXPECT_TRUE(c.Read(kCr, 4) & (1u << 31));  // locked again after the reset
+}
+
+TEST(G474Flash, ACutProgramReadsBackWithEccdAddressBankAndAnNmi) {
+  VirtualChip c;
+  std::optional<ResetCause> cause;
+  c.SetResetHandler([&](ResetCause rc) { cause = rc; });
+  int nmis = 0;
+  std::uint32_t eccr_in_nmi = 0;
+  c.SetNmiHandler([&] {
+    ++nmis;
+    eccr_in_nmi = c.Read(kEccr, 4);
+  });
+  Unlock(c);
+  Program(c, 0x0807F000, 0x0123456789ABCDEFull);  // a good neighbour
+  c.flash().CutPowerAfter(0, 7);
+  c.Write(kCr, 1u, 4);
+  c.Write(0x0807F008, 0x11111111u, 4);
+  c.Write(0x0807F00C, 0x22222222u, 4);
+  c.AdvanceTo(c.now() + Microseconds(100));
+  ASSERT_TRUE(cause);
+  EXPECT_EQ(c.Read(kEccr, 4), 0u) << "nothing read yet";
+  EXPECT_EQ(c.Read(0x0807F000, 4), 0x89ABCDEFu);
+  EXPECT_EQ(nmis, 0) << "the neighbour's ECC matches";
+  (void)c.Read(0x0807F00C, 4);  // the high word of the cut double word
+  EXPECT_EQ(nmis, 1);
+  // Bank 2 (BK_ECC), the double word's offset in its bank (0x3F008), ECCD.
+  EXPECT_EQ(eccr_in_nmi, kEccd | kBkEcc | 0x3F008u);
+  EXPECT_EQ(*cause, ResetCause::kPowerCut) << "the NMI handler returned: no reset";
+  // Every read raises the NMI again; the address stays the first error's until ECCD is
+  // cleared (write 1).
+  (void)c.Read(0x0807F008, 2);
+  EXPECT_EQ(nmis, 2);
+  c.Write(kEccr, kEccd, 4);
+  EXPECT_EQ(c.Read(kEccr, 4) & kEccd, 0u);
+  EXPECT_FALSE(c.violations().Contains("NVIC", "NMI"));
+}
+
+TEST(G474Flash, ACutEraseLeavesThePageCorruptUntilItIsErasedAgain) {
+  VirtualChip c;
+  c.SetResetHandler([](ResetCause) {});
+  std::vector<std::uint32_t> seen;
+  c.SetNmiHandler([&] {
+    seen.push_back(c.Read(kEccr, 4));
+    c.Write(kEccr, kEccd, 4);  // cleared: the next error gets its own address
+  });
+  Unlock(c);
+  c.flash().CutPowerAfter(0, 9);
+  c.Write(kCr, (1u << 1) | (5u << 3), 4);  // bank 1, page 5
+  c.Write(kCr, c.Read(kCr, 4) | (1u << 16), 4);
+  c.AdvanceTo(c.now() + Microseconds(30000));
+  (void)c.Read(0x08000000 + 5 * 2048, 4);
+  (void)c.Read(0x08000000 + 5 * 2048 + 2040, 4);
+  (void)c.Read(0x08000000 + 6 * 2048, 4);  // the next page is whole
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_EQ(seen[0], kEccd | (5u * 2048));
+  EXPECT_EQ(seen[1], kEccd | (5u * 2048 + 2040));
+  // A program of all zeros is accepted over a written double word and clears every
+  // data and ECC bit: that double word reads again.
+  Unlock(c);
+  Program(c, 0x08000000 + 5 * 2048 + 8, 0);
+  (void)c.Read(0x08000000 + 5 * 2048 + 8, 4);
+  EXPECT_EQ(seen.size(), 2u);
+  // Erasing the page again makes it whole.
+  ErasePage(c, 5, false);
+  for (std::uint32_t off = 0; off < 2048; off += 4) {
+    EXPECT_EQ(c.Read(0x08000000 + 5 * 2048 + off, 4), 0xFFFFFFFFu);
+  }
+  EXPECT_EQ(seen.size(), 2u);
+}
+
+TEST(G474Flash, AnEccErrorWithNoNmiHandlerResetsTheChip) {
+  // Both images' old vector tables sent the NMI to their fault handler, which resets:
+  // at every start the same read, the same reset.
+  VirtualChip c;
+  std::vector<ResetCause> causes;
+  c.SetResetHandler([&](ResetCause rc) { causes.push_back(rc); });
+  Unlock(c);
+  c.flash().CutPowerAfter(0, 3);
+  Program(c, 0x08010000, 0x55);
+  ASSERT_EQ(causes.size(), 1u);
+  (void)c.Read(0x08010000, 4);
+  ASSERT_EQ(causes.size(), 2u);
+  EXPECT_EQ(causes[1], ResetCause::kSoftware);
+  EXPECT_TRUE(c.violations().Contains("NVIC", "NMI"));
 }
 
 // A whole file's bytes (none when it cannot be read).
@@ -187,6 +275,32 @@ TEST(G474Flash, ContentsPersistToAFile) {
   EXPECT_TRUE(c.flash().mirrored());
   EXPECT_EQ(c.Read(0x0807F000, 4), 0x89ABCDEFu);
   std::remove(path.c_str());
+  std::remove((path + ".ecc").c_str());
+}
+
+TEST(G474Flash, CorruptDoubleWordsPersistWithTheFile) {
+  const std::string path =
+      "/tmp/g474_flash_ecc_" + std::to_string(static_cast<long>(getpid())) + ".bin";
+  std::remove(path.c_str());
+  std::remove((path + ".ecc").c_str());
+  {
+    ChipConfig cfg;
+    cfg.flash.path = path;
+    VirtualChip c(cfg);
+    c.SetResetHandler([](ResetCause) {});
+    Unlock(c);
+    c.flash().CutPowerAfter(0, 5);
+    Program(c, 0x0807F800, 0x1234);
+  }
+  ChipConfig cfg;
+  cfg.flash.path = path;
+  VirtualChip c(cfg);
+  int nmis = 0;
+  c.SetNmiHandler([&] { ++nmis; });
+  (void)c.Read(0x0807F800, 4);
+  EXPECT_EQ(nmis, 1) << "the restarted board reads the cut double word as the chip would";
+  std::remove(path.c_str());
+  std::remove((path + ".ecc").c_str());
 }
 
 TEST(G474Flash, AFileOfAnotherSizeIsLeftAlone) {

@@ -103,11 +103,70 @@ TEST(Stm32g4Flash, ErasesAPageOfBank2) {
   const long start = s.FirstWrite(kCr, Equals(cr | kStrt));
   ASSERT_GE(set, 0);
   ASSERT_GT(start, set);
-  // The caches were off during the erase, then reset and back on.
-  EXPECT_LT(s.FirstWrite(kAcr, Equals(0x104)), start);
-  EXPECT_GT(s.FirstWrite(kAcr, HasBits((1u << 11) | (1u << 12))), start);
+  // As ST's HAL sequences an erase (HAL_FLASHEx_Erase, then FLASH_FlushCaches): only
+  // the data cache (DCEN, bit 10) is off for the operation, the instruction cache
+  // (ICEN, bit 9) stays on until the erase is over; then each is reset (ICRST bit 11,
+  // DCRST bit 12) only while it is disabled, and both come back on.
+  constexpr std::uint32_t kIcen = 1u << 9, kDcen = 1u << 10, kIcrst = 1u << 11,
+                          kDcrst = 1u << 12;
+  const long data_off = s.FirstWrite(kAcr, Equals(0x304));
+  ASSERT_GE(data_off, 0);
+  EXPECT_LT(data_off, start);
+  const long icache_off =
+      s.FirstWrite(kAcr, [&](std::uint32_t v) { return (v & kIcen) == 0; });
+  EXPECT_GT(icache_off, start) << "the instruction cache stays on during the erase";
+  const long icrst = s.FirstWrite(kAcr, HasBits(kIcrst));
+  const long dcrst = s.FirstWrite(kAcr, HasBits(kDcrst));
+  ASSERT_GT(icrst, start);
+  ASSERT_GT(dcrst, start);
+  for (const auto& access : s.log) {
+    if (!access.write || access.address != kAcr) continue;
+    if (access.value & kIcrst) {
+      EXPECT_EQ(access.value & kIcen, 0u);
+    }
+    if (access.value & kDcrst) {
+      EXPECT_EQ(access.value & kDcen, 0u);
+    }
+  }
   EXPECT_EQ(s.Peek(kAcr), 0x704u);
   EXPECT_EQ(s.Peek(kCr), kLock);
+}
+
+TEST(Stm32g4Flash, AnEccDoubleErrorTakenByTheNmiFailsTheRead) {
+  // FLASH_ECCR (0x4002_2018, CMSIS stm32g474xx.h): ADDR_ECC 18:0 (the double word's
+  // offset in its bank), BK_ECC bit 21, ECCD bit 31 (write 1 to clear). The scripted
+  // read of a corrupt double word raises the NMI there, whose handler the image runs.
+  static constexpr Address kEccr = 0x40022018;
+  ScriptedSpace s;
+  ModelFlash(s);
+  Stm32g4Flash flash(254, 2);
+  ASSERT_TRUE(flash.Init());
+  s.memory[0x0807F808u] = 0x12345678u;  // page 255 offset 8: a cut program's garbage
+  const auto erased = s.on_read;
+  s.on_read = [&s, erased](Address a) -> std::optional<std::uint32_t> {
+    if (a == 0x0807F808u || a == 0x0807F80Cu) {
+      s.memory[kEccr] = (1u << 31) | (1u << 21) | 0x3F808u;
+      EXPECT_TRUE(HandleFlashEccNmi());  // the NMI, before the load completes
+    }
+    return erased(a);
+  };
+  const std::uint32_t errors = FlashEccErrors();
+  std::array<std::uint8_t, 16> out{};
+  EXPECT_EQ(flash.Read(255, 0, out), hal::FlashResult::kHardwareError);
+  EXPECT_GT(FlashEccErrors(), errors);
+  EXPECT_EQ(LastFlashEccAddress(), 0x0807F808u);
+  // ECCD cleared by writing 1 to it.
+  EXPECT_GE(s.FirstWrite(kEccr, HasBits(1u << 31)), 0);
+  // The erased-check before a program reads it too: refused, not programmed.
+  s.log.clear();
+  EXPECT_EQ(flash.ProgramDoubleWord(255, 8, 0), hal::FlashResult::kHardwareError);
+  EXPECT_EQ(s.FirstWrite(kCr, Equals(kPg)), -1);
+  // The neighbours read as they are.
+  std::array<std::uint8_t, 8> good{};
+  EXPECT_EQ(flash.Read(255, 0, good), hal::FlashResult::kOk);
+  // An NMI with ECCD clear is not the flash's: the handler says so.
+  s.memory[kEccr] = 0;
+  EXPECT_FALSE(HandleFlashEccNmi());
 }
 
 TEST(Stm32g4Flash, ErrorFlagsAreReportedAndCleared) {

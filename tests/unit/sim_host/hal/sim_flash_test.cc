@@ -1,7 +1,9 @@
 // The simulated flash against the STM32G4's rules as hal/flash.h states them from
 // RM0440 §5 (2 KB pages, erase to 0xFF, 64-bit programs at 8-aligned offsets only into
 // erased double-words, little-endian), its file, and its power cuts: the cut operation
-// fails and leaves garbage of the documented kind, every later one fails until PowerOn.
+// fails and leaves garbage of the documented kind, every later one fails until PowerOn,
+// and the double words it left read as ECC double errors (RM0440 §5.3: data and ECC
+// bits cut together no longer match) until the page is erased again.
 #include "hal/sim/sim_flash.h"
 
 #include <gtest/gtest.h>
@@ -21,6 +23,14 @@ std::array<std::uint8_t, 8> DoubleWord(const SimFlash& flash, std::uint32_t page
                                        std::uint32_t offset) {
   std::array<std::uint8_t, 8> dw{};
   EXPECT_EQ(flash.Read(page, offset, dw), FlashResult::kOk);
+  return dw;
+}
+
+// The double word's bytes as they are, whatever the read answers.
+std::array<std::uint8_t, 8> RawDoubleWord(const SimFlash& flash, std::uint32_t page,
+                                          std::uint32_t offset) {
+  std::array<std::uint8_t, 8> dw{};
+  (void)flash.Read(page, offset, dw);
   return dw;
 }
 
@@ -122,7 +132,7 @@ TEST(SimFlash, AnInterruptedProgramLeavesAMixOfOldAndNewBits) {
   SimFlash flash(1);
   flash.CutPowerAfter(0, 7);
   ASSERT_EQ(flash.ProgramDoubleWord(0, 8, kNew), FlashResult::kHardwareError);
-  const std::uint64_t left = Value(DoubleWord(flash, 0, 8));
+  const std::uint64_t left = Value(RawDoubleWord(flash, 0, 8));
   EXPECT_EQ(left & kNew, kNew);
   EXPECT_NE(left, kNew);               // 32 bits each had to make it
   EXPECT_NE(left, ~std::uint64_t{0});  // and none at all is as unlikely
@@ -130,10 +140,21 @@ TEST(SimFlash, AnInterruptedProgramLeavesAMixOfOldAndNewBits) {
   SimFlash twin(1);
   twin.CutPowerAfter(0, 7);
   ASSERT_EQ(twin.ProgramDoubleWord(0, 8, kNew), FlashResult::kHardwareError);
-  EXPECT_EQ(Value(DoubleWord(twin, 0, 8)), left);
-  // The double-word is not erased any more: it cannot be programmed again.
+  EXPECT_EQ(Value(RawDoubleWord(twin, 0, 8)), left);
+  // Its ECC does not match: every read of it fails (an NMI on the chip), a read of its
+  // neighbours does not, and it cannot be programmed (the erased-check reads it).
+  std::array<std::uint8_t, 8> dw{};
+  EXPECT_EQ(flash.Read(0, 8, dw), FlashResult::kHardwareError);
+  EXPECT_EQ(flash.Read(0, 12, std::span(dw).first(1)), FlashResult::kHardwareError);
+  EXPECT_EQ(flash.Read(0, 0, dw), FlashResult::kOk);
+  EXPECT_EQ(flash.Read(0, 16, dw), FlashResult::kOk);
+  EXPECT_EQ(flash.corrupt_double_words(), 1);
   flash.PowerOn();
-  EXPECT_EQ(flash.ProgramDoubleWord(0, 8, kNew), FlashResult::kNotErased);
+  EXPECT_EQ(flash.ProgramDoubleWord(0, 8, kNew), FlashResult::kHardwareError);
+  EXPECT_EQ(flash.ecc_errors(), 4);  // the raw read, two reads, the program
+  ASSERT_EQ(flash.ErasePage(0), FlashResult::kOk);
+  EXPECT_EQ(flash.corrupt_double_words(), 0);
+  EXPECT_EQ(flash.ProgramDoubleWord(0, 8, kNew), FlashResult::kOk);
 }
 
 TEST(SimFlash, AnInterruptedEraseLeavesThePageNeitherOldNorErased) {
@@ -142,9 +163,10 @@ TEST(SimFlash, AnInterruptedEraseLeavesThePageNeitherOldNorErased) {
   flash.CutPowerAfter(0, 3);
   ASSERT_EQ(flash.ErasePage(0), FlashResult::kHardwareError);
   flash.PowerOn();
-  EXPECT_FALSE(PageErased(flash, 0));
   std::array<std::uint8_t, SimFlash::kPageSize> bytes{};
-  ASSERT_EQ(flash.Read(0, 0, bytes), FlashResult::kOk);
+  // Every double word of the cut page reads as an ECC error.
+  ASSERT_EQ(flash.Read(0, 0, bytes), FlashResult::kHardwareError);
+  EXPECT_EQ(flash.corrupt_double_words(), 256);
   int distinct = 0;
   std::array<bool, 256> seen{};
   for (const std::uint8_t b : bytes) {
@@ -188,6 +210,27 @@ TEST(SimFlash, WritesEachOperationWhereItChangedTheFile) {
     EXPECT_EQ(flash.file_errors(), 0);
   }
   std::remove(path.c_str());
+}
+
+TEST(SimFlash, CorruptDoubleWordsPersistBesideTheFile) {
+  const std::string path = ::testing::TempDir() + "/mjc_flash_ecc.bin";
+  std::remove(path.c_str());
+  std::remove((path + ".ecc").c_str());
+  {
+    SimFlash flash(4, path);
+    flash.CutPowerAfter(0, 11);
+    ASSERT_EQ(flash.ProgramDoubleWord(2, 40, 0x55), FlashResult::kHardwareError);
+  }  // the process dies (kill -9 keeps what was written)
+  SimFlash again(4, path);
+  ASSERT_TRUE(again.mirrored());
+  std::array<std::uint8_t, 8> dw{};
+  EXPECT_EQ(again.Read(2, 40, dw), FlashResult::kHardwareError);
+  EXPECT_EQ(again.Read(2, 32, dw), FlashResult::kOk);
+  ASSERT_EQ(again.ErasePage(2), FlashResult::kOk);
+  SimFlash third(4, path);
+  EXPECT_EQ(third.Read(2, 40, dw), FlashResult::kOk);
+  std::remove(path.c_str());
+  std::remove((path + ".ecc").c_str());
 }
 
 TEST(SimFlash, AFileOfAnotherSizeIsLeftUntouched) {

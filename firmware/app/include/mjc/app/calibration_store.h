@@ -44,6 +44,8 @@ class CalibrationStore {
   // Writes `record` as the newest. On failure the previous record is still the newest
   // valid one (the pages were written in an order that guarantees it).
   StoreResult Save(const protocol::CalibrationRecord& record);
+  // Pages the last Load or Save could not read (RecordPages::unreadable).
+  std::uint8_t unreadable_pages() const { return pages_.unreadable(); }
 
  private:
   boot::RecordPages pages_;

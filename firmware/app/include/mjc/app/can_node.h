@@ -110,6 +110,12 @@ class CanNode {
 
   CanNodeCounters counters() const;
   const CanNodeConfig& config() const { return config_; }
+  // Record pages found unreadable at start-up (protocol::flash_unreadable bits), told
+  // in every BoardInfo from now on.
+  void AddFlashUnreadable(std::uint8_t bits) {
+    config_.identity.flash_unreadable =
+        static_cast<std::uint8_t>(config_.identity.flash_unreadable | bits);
+  }
 
  private:
   // What a command handed to the app came from, for answering its verdict.

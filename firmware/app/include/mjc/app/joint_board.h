@@ -45,7 +45,8 @@ class JointBoard {
   // Start-up, in the main loop before the tick runs: hands the newest stored
   // calibration to the app (it takes effect at the first tick) and returns it; nullopt
   // leaves the board uncalibrated (trials refused). The board announces itself (its
-  // BoardInfo) at the first Poll.
+  // BoardInfo) at the first Poll, with a calibration page it could not read named in
+  // BoardInfo.flash_unreadable.
   std::optional<CalibrationStore::Loaded> Boot();
 
   // The control tick (interrupt context).

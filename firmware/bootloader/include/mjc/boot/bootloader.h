@@ -62,7 +62,8 @@ static_assert(SameNumber(ImageCheck::kNoImage, protocol::BootError::kNoImage) &&
               SameNumber(ImageCheck::kBadLoadAddress,
                          protocol::BootError::kBadLoadAddress) &&
               SameNumber(ImageCheck::kBadVectors, protocol::BootError::kBadVectors) &&
-              SameNumber(ImageCheck::kImageCrc, protocol::BootError::kImageCrc));
+              SameNumber(ImageCheck::kImageCrc, protocol::BootError::kImageCrc) &&
+              SameNumber(ImageCheck::kUnreadable, protocol::BootError::kUnreadable));
 constexpr protocol::BootError ToBootError(ImageCheck c) {
   return static_cast<protocol::BootError>(static_cast<std::uint8_t>(c));
 }

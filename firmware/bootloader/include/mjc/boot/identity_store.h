@@ -49,6 +49,8 @@ class IdentityStore {
   // Writes `identity` as the newest; on failure the previous record is still the
   // newest valid one.
   IdentityResult Save(const BoardIdentity& identity);
+  // Pages the last Load or Save could not read (RecordPages::unreadable).
+  std::uint8_t unreadable_pages() const { return pages_.unreadable(); }
 
  private:
   RecordPages pages_;

@@ -108,6 +108,9 @@ enum class ImageCheck : std::uint8_t {
   kBadLoadAddress = 6,  // linked to run elsewhere than the board's application region
   kBadVectors = 7,      // initial stack pointer or reset vector implausible
   kImageCrc = 8,        // the image does not match the header's CRC
+  kUnreadable = 9,      // the flash failed a read of the header or image: an ECC
+                        // double error, which an erase or program cut by a power
+                        // loss leaves behind (RM0440 §5.3)
 };
 
 // What one board accepts.

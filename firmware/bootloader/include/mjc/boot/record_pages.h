@@ -19,6 +19,12 @@
 // program operation (the STM32G4 programs a double-word at once), so a power cut
 // leaves the old record or the new one. A page counts when its header, CRC and commit
 // check out and the caller accepts its payload; the newest such page wins.
+//
+// A page the flash cannot read (an ECC double error: the STM32G4 leaves one in every
+// double word of an erase or program a power cut interrupted, RM0440 §5.3) counts as
+// holding no record, so the other page's record wins; the next save erases it (a save
+// always writes the page that does not hold the newest valid record). unreadable()
+// names such pages for the board's report.
 #pragma once
 
 #include <cstddef>
@@ -75,6 +81,9 @@ class RecordPages {
   // previous record is still the newest valid one.
   RecordResult Save(std::span<const std::uint8_t> payload);
 
+  // Which pages the last Load or Save found unreadable: bit 0 page A, bit 1 page B.
+  std::uint8_t unreadable() const { return unreadable_; }
+
  private:
   std::optional<Found> ReadPage(std::uint32_t page,
                                 std::span<std::uint8_t> payload) const;
@@ -83,6 +92,7 @@ class RecordPages {
   std::uint32_t pages_[2];
   RecordFormat format_;
   Accept accept_;
+  mutable std::uint8_t unreadable_ = 0;
 };
 
 }  // namespace mjc::boot

@@ -306,12 +306,20 @@ struct Heartbeat {
 // build that made it, why it last started, and an identity of the physical board (from
 // the chip's unique id; a simulated board draws one), so that two boards answering with
 // one node id are told apart.
+// Record pages the board found unreadable at start-up (an ECC double error that a
+// power cut during a save leaves): BoardInfo.flash_unreadable's bits. The other page's
+// record was used; the next save of that record erases the bad page.
+namespace flash_unreadable {
+inline constexpr std::uint8_t kIdentityA = 1u << 0, kIdentityB = 1u << 1,
+                              kCalibrationA = 1u << 2, kCalibrationB = 1u << 3;
+}
 struct BoardInfo {
   std::uint32_t build = 0;  // the build's commit: the first 8 hex digits of its hash
   bool dirty = false;       // built from a tree with uncommitted changes
   ImageKind image = ImageKind::kApplication;
   ResetCause reset_cause = ResetCause::kUnknown;
-  std::uint16_t instance = 0;  // the physical board (hash of its unique id)
+  std::uint16_t instance = 0;         // the physical board (hash of its unique id)
+  std::uint8_t flash_unreadable = 0;  // flash_unreadable:: bits
 };
 struct HostHeartbeat {
   std::uint8_t sequence = 0;
@@ -356,7 +364,7 @@ enum class StayReason : std::uint8_t {
 };
 constexpr bool ValidEnumValue(StayReason r) { return static_cast<std::uint8_t>(r) <= 6; }
 
-// Errors of the bootloader. Stable numbers, never renumbered; 1-8 are the image
+// Errors of the bootloader. Stable numbers, never renumbered; 1-9 are the image
 // checks (mjc::boot::ImageCheck, the same numbers), 16-31 the update's, 32 and up the
 // running application's answers to a BootHold.
 enum class BootError : std::uint8_t {
@@ -369,6 +377,8 @@ enum class BootError : std::uint8_t {
   kBadLoadAddress = 6,     // linked for another address than the application region's
   kBadVectors = 7,         // initial stack pointer or reset vector implausible
   kImageCrc = 8,           // the image in flash does not match the header's CRC
+  kUnreadable = 9,         // the flash failed a read of the header or image (an ECC
+                           // error a cut update left): no image, ready for an update
   kNotReceiving = 16,      // a chunk or commit without a Begin
   kUnexpectedOffset = 17,  // a chunk not at the next offset (BootResult.next_offset)
   kBadChunk = 18,          // empty, not a multiple of 8 bytes, or past the image's end
@@ -383,7 +393,7 @@ enum class BootError : std::uint8_t {
 };
 constexpr bool ValidEnumValue(BootError e) {
   const auto v = static_cast<std::uint8_t>(e);
-  return v <= 8 || (v >= 16 && v <= 24) || v == 32;
+  return v <= 9 || (v >= 16 && v <= 24) || v == 32;
 }
 
 // What a BootResult answers. Stable numbers.
@@ -588,7 +598,8 @@ MJC_MESSAGE(Heartbeat, kHeartbeat, 8, kBoard, MakeSignal("state", &T::state, 0, 
 MJC_MESSAGE(BoardInfo, kBoardInfo, 8, kBoard, MakeSignal("build", &T::build, 0, 32),
             MakeSignal("dirty", &T::dirty, 32, 1), MakeSignal("image", &T::image, 33, 3),
             MakeSignal("reset_cause", &T::reset_cause, 36, 4),
-            MakeSignal("instance", &T::instance, 40, 16));
+            MakeSignal("instance", &T::instance, 40, 16),
+            MakeSignal("flash_unreadable", &T::flash_unreadable, 56, 4));
 MJC_MESSAGE(HostHeartbeat, kHostHeartbeat, 3, kHost,
             MakeSignal("sequence", &T::sequence, 0, 8),
             MakeSignal("session", &T::session, 8, 16));

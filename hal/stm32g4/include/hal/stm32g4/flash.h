@@ -13,6 +13,13 @@
 //
 // Reads go through the register access layer (mmio.h), so on the host they reach the
 // bound model of the flash array like every other access.
+//
+// ECC: a double word whose erase or program was cut by a power loss or a reset holds
+// data that do not match its ECC; reading it sets FLASH_ECCR.ECCD and raises the NMI
+// (RM0440 §5.3). Each image's NMI handler calls HandleFlashEccNmi, which records the
+// error and clears ECCD; a Read (or the erased-check before a program) during which
+// one was recorded fails with kHardwareError instead of the board resetting — a
+// reset would read the same double word again at the next start, forever.
 #pragma once
 
 #include <cstdint>
@@ -22,6 +29,14 @@
 #include "hal/stm32g4/mmio.h"
 
 namespace mjc::stm32g4 {
+
+// For the NMI handler: when FLASH_ECCR.ECCD is set, records the failing double word's
+// address (from ADDR_ECC and BK_ECC), clears ECCD and returns true; false when the NMI
+// had another cause (the handler then stops the board as for a fault).
+bool HandleFlashEccNmi();
+// ECC double errors recorded since reset, and the last one's bus address.
+std::uint32_t FlashEccErrors();
+std::uint32_t LastFlashEccAddress();
 
 class Stm32g4Flash final : public hal::Flash {
  public:

@@ -58,12 +58,16 @@ struct VectorTable {
   std::array<Handler, kVectorCount - 1> handlers;
 };
 
-// Reset at `reset`, every other system exception at `fault` (the images' handler that
-// stops the board and resets it).
+// Reset at `reset`, the NMI at `nmi`, every other system exception at `fault` (the
+// images' handler that stops the board and resets it). The NMI has a handler of its
+// own: the flash raises it for an ECC double error (hal/stm32g4/flash.h), which a power
+// cut during an erase or program leaves behind — resetting on it would read the same
+// double word at the next start, and the next, forever.
 template <class Handler>
-constexpr SystemHandlers<Handler> ResetAndFaultHandlers(Handler reset, Handler fault) {
+constexpr SystemHandlers<Handler> ResetAndFaultHandlers(Handler reset, Handler nmi,
+                                                        Handler fault) {
   return {.reset = reset,
-          .nmi = fault,
+          .nmi = nmi,
           .hard_fault = fault,
           .mem_manage = fault,
           .bus_fault = fault,

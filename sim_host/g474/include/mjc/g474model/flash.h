@@ -30,12 +30,26 @@
 //    random point of its busy time (seeded); an interrupted erase leaves the page
 //    random bytes, an interrupted program a random mix of old and new bits, and the
 //    whole chip loses power (the owner restarts it). Optional persistence to a file.
+//  - ECC (§5.3 "Error code correction (ECC)", FLASH_ECCR): the array stores 8 ECC
+//    bits with every 64-bit double word, written with it by a program and set to the
+//    erased pattern's by an erase. An operation cut by a power loss leaves data and
+//    ECC that do not match: every double word of a cut erase and the double word of a
+//    cut program read back with a double error. Such a read (a CPU or debugger load;
+//    not the interface's own erased-check before programming) sets ECCR.ECCD with
+//    ADDR_ECC (the double word's byte offset in its bank) and BK_ECC (its bank) — both
+//    kept from the first error until ECCD and ECCC are cleared (write 1) — and raises
+//    the NMI (TakeNmi; the chip takes it, it cannot be masked). An erase of the page,
+//    or a program of all zeros over the double word (the one value the interface
+//    accepts over a written double word), leaves it consistent again. The corrupt
+//    double words persist with the array (a second file, "<path>.ecc", a bit each).
 //
 //  - Option bytes: FLASH_OPTR, OPTSTRT and OBL_LAUNCH through OptionBytes
 //    (option_bytes.h), its word kept after the array in the persistence file.
 //
-// Not covered: fast programming (FSTPG), PCROP and the securable area, ECC errors,
-// single-bank mode (DBANK = 0), power-down modes, the OTP area.
+// Not covered: fast programming (FSTPG), PCROP and the securable area, single-bit
+// (corrected) ECC errors (ECCC and its FLASH interrupt: a cut never leaves one here), ECC
+// errors in the system memory (SYSF_ECC), single-bank mode (DBANK = 0), power-down modes,
+// the OTP area.
 #pragma once
 
 #include <cstdint>
@@ -84,6 +98,11 @@ class Flash final : public Peripheral {
                                  kPgserr = 1u << 7, kMisserr = 1u << 8,
                                  kFasterr = 1u << 9, kRderr = 1u << 14,
                                  kOptverr = 1u << 15, kBsy = 1u << 16;
+  // ECCR bits (CMSIS FLASH_ECCR_*): ADDR_ECC 18:0, BK_ECC 21, SYSF_ECC 22, ECCCIE 24,
+  // ECCC 30 and ECCD 31 (both write 1 to clear).
+  static constexpr std::uint32_t kEccAddrMask = 0x7FFFFu, kBkEcc = 1u << 21,
+                                 kSysfEcc = 1u << 22, kEcccie = 1u << 24,
+                                 kEccc = 1u << 30, kEccd = 1u << 31;
 
   Flash(ViolationLog* log, FlashConfig config);
   ~Flash() override;
@@ -127,6 +146,20 @@ class Flash final : public Peripheral {
     return ((sr_ & kEop) && (cr_ & (1u << 24))) || ((sr_ & kOperr) && (cr_ & (1u << 25)));
   }
 
+  // ECC: true once for each read that found a double error (the NMI the chip takes).
+  bool TakeNmi() {
+    const bool n = nmi_;
+    nmi_ = false;
+    return n;
+  }
+  std::uint32_t eccr() const { return eccr_; }
+  std::uint32_t acr() const { return acr_; }
+  // Whether the double word at array offset `offset` would read with a double error.
+  bool EccCorrupt(std::uint32_t offset) const { return ecc_bad_[offset / 8]; }
+  // Double words that read with a double error now, and reads that found one so far.
+  long corrupt_double_words() const;
+  long ecc_detections() const { return ecc_detections_; }
+
   // Power cuts: the (count+1)-th erase or program from now is interrupted; -1 disables.
   void CutPowerAfter(long count, std::uint64_t seed);
   long operations() const { return operations_; }
@@ -165,12 +198,21 @@ class Flash final : public Peripheral {
   int BankOf(std::uint32_t offset) const { return offset < kSize / 2 ? 0 : 1; }
   // Writes array bytes [offset, offset + bytes) to the persistence file, if kept.
   void Save(std::uint32_t offset, std::uint32_t bytes) const;
+  // Marks the double words of [offset, offset + bytes) consistent or not; the ECC file
+  // is rewritten when one changed.
+  void SetEcc(std::uint32_t offset, std::uint32_t bytes, bool corrupt);
+  void SaveEcc() const;
 
   ViolationLog* log_;
   FlashConfig config_;
   Picoseconds now_ = 0;
   std::vector<std::uint8_t> memory_;
-  int file_ = -1;  // the persistence file, open for writing; -1: none
+  int file_ = -1;              // the persistence file, open for writing; -1: none
+  int ecc_file_ = -1;          // "<path>.ecc": a bit per double word, 1 = corrupt
+  std::vector<bool> ecc_bad_;  // per double word: data and ECC do not match
+  std::uint32_t eccr_ = 0;
+  bool nmi_ = false;
+  long ecc_detections_ = 0;
   std::uint32_t acr_ = 0, sr_ = 0, cr_ = 0;
   std::uint32_t wrp_[4] = {};  // WRP1AR, WRP1BR, WRP2AR, WRP2BR
   int key_stage_ = 0;          // 1 after KEY1

@@ -23,6 +23,14 @@
 // vector table holds); lines are level-sensitive, so a handler that does not clear its
 // flag is entered again.
 //
+// The NMI: a read of the flash array that finds an ECC double error (Flash) raises it
+// at once, whatever PRIMASK and the running handler's priority (ARMv7-M B1.5.2: NMI is
+// priority -2 and cannot be masked); the NMI handler (SetNmiHandler, the image's
+// vector 2) runs before the read returns, and the read then returns the data as read.
+// With no NMI handler the chip does what both images' DefaultHandler did at vector 2:
+// a system reset (reported as a violation) — on a board that reads such a double word
+// at every start, a reset loop.
+//
 // Resets: IWDG expiry, AIRCR.SYSRESETREQ and a power cut (the world's PowerCut or a
 // flash power cut scheduled with flash().CutPowerAfter) reset every model — the flash
 // array keeps its contents, RCC_CSR gets the cause's flags — and then call the reset
@@ -127,6 +135,9 @@ class VirtualChip final : public stm32g4::RegisterSpace {
 
   // ── Interrupts and resets ───────────────────────────────────────────────────────
   void SetHandler(int irq, std::function<void()> handler);
+  // The NMI handler (null: none, the default handler resets).
+  void SetNmiHandler(std::function<void()> handler) { nmi_handler_ = std::move(handler); }
+  int nmis() const { return nmis_; }
   bool primask() const { return primask_; }
   void SetResetHandler(std::function<void(ResetCause)> handler) {
     reset_handler_ = std::move(handler);
@@ -254,6 +265,11 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   std::mt19937_64 boot0_rng_;
   std::optional<ResetCause> reset_pending_;
   std::function<void(ResetCause)> reset_handler_;
+  std::function<void()> nmi_handler_;
+  bool in_nmi_ = false;
+  int nmis_ = 0;
+  // Takes the NMI a flash read raised, if one did.
+  void TakeFlashNmi();
 };
 
 }  // namespace mjc::g474model

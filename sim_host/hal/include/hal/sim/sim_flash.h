@@ -44,6 +44,10 @@ class SimFlash final : public Flash {
     cut_after_ = -1;
   }
   long operations() const { return operations_; }
+  // Reads (and pre-program checks) that found an ECC double error so far.
+  long ecc_errors() const { return ecc_errors_; }
+  // Double words whose data and ECC do not match now.
+  long corrupt_double_words() const;
 
  private:
   FlashResult DoErasePage(std::uint32_t page) override;
@@ -56,6 +60,10 @@ class SimFlash final : public Flash {
   bool Interrupted();
   // Writes memory [offset, offset + bytes) to the file, when there is one.
   void Save(std::size_t offset, std::size_t bytes);
+  // Marks the double words of [offset, offset + bytes); the ECC file follows.
+  void SetEcc(std::size_t offset, std::size_t bytes, bool corrupt);
+  void SaveEcc();
+  bool AnyCorrupt(std::size_t offset, std::size_t bytes) const;
 
   // The mirror file, open for writing: closed with its owner, moved with it, never
   // copied (a copy of the flash is memory only).
@@ -72,6 +80,9 @@ class SimFlash final : public Flash {
   std::uint32_t pages_;
   std::vector<std::uint8_t> memory_;
   MirrorFile file_;
+  MirrorFile ecc_file_;        // "<path>.ecc"
+  std::vector<bool> ecc_bad_;  // per double word: data and ECC do not match
+  mutable long ecc_errors_ = 0;
   long file_errors_ = 0;
   bool powered_ = true;
   long cut_after_ = -1;

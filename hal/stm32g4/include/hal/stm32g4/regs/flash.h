@@ -22,12 +22,16 @@ inline constexpr FieldDef kCrFields[] = {
     {"PG", 0, 1},    {"PER", 1, 1},    {"MER1", 2, 1},  {"PNB", 3, 7},
     {"BKER", 11, 1}, {"START", 16, 1}, {"LOCK", 31, 1},
 };
+inline constexpr FieldDef kEccrFields[] = {
+    {"ADDR_ECC", 0, 19}, {"BK_ECC", 21, 1}, {"SYSF_ECC", 22, 1},
+    {"ECCCIE", 24, 1},   {"ECCC", 30, 1},   {"ECCD", 31, 1},
+};
 inline constexpr FieldDef kOptrFields[] = {
     {"DBANK", 22, 1},  // 1: dual bank, 2 KB pages
 };
 inline constexpr RegisterDef kRegisters[] = {
     {"ACR", 0x00, kAcrFields}, {"KEYR", 0x08, kKeyrFields}, {"SR", 0x10, kSrFields},
-    {"CR", 0x14, kCrFields},   {"OPTR", 0x20, kOptrFields},
+    {"CR", 0x14, kCrFields},   {"OPTR", 0x20, kOptrFields}, {"ECCR", 0x18, kEccrFields},
 };
 
 inline constexpr BlockDef kBlock{"FLASH", 0x40022000u, kRegisters};
@@ -39,6 +43,7 @@ inline constexpr std::uint32_t kKeyr = OffsetOf(kBlock, "KEYR");
 inline constexpr std::uint32_t kSr = OffsetOf(kBlock, "SR");
 inline constexpr std::uint32_t kCr = OffsetOf(kBlock, "CR");
 inline constexpr std::uint32_t kOptr = OffsetOf(kBlock, "OPTR");
+inline constexpr std::uint32_t kEccr = OffsetOf(kBlock, "ECCR");
 
 namespace acr {
 inline constexpr Field kLatency = FieldOf(kBlock, "ACR", "LATENCY");
@@ -81,6 +86,17 @@ inline constexpr Field kBker = FieldOf(kBlock, "CR", "BKER");
 inline constexpr Field kStrt = FieldOf(kBlock, "CR", "START");
 inline constexpr Field kLock = FieldOf(kBlock, "CR", "LOCK");
 }  // namespace cr
+// ECC (RM0440 §5.3 "Error code correction (ECC)"): a read that finds two wrong bits in
+// a double word sets ECCD and raises the NMI; ADDR_ECC (the double word's offset in its
+// bank) and BK_ECC keep the first error until ECCD/ECCC are cleared by writing 1.
+namespace eccr {
+inline constexpr Field kAddrEcc = FieldOf(kBlock, "ECCR", "ADDR_ECC");
+inline constexpr Field kBkEcc = FieldOf(kBlock, "ECCR", "BK_ECC");
+inline constexpr Field kSysfEcc = FieldOf(kBlock, "ECCR", "SYSF_ECC");
+inline constexpr Field kEcccie = FieldOf(kBlock, "ECCR", "ECCCIE");
+inline constexpr Field kEccc = FieldOf(kBlock, "ECCR", "ECCC");
+inline constexpr Field kEccd = FieldOf(kBlock, "ECCR", "ECCD");
+}  // namespace eccr
 namespace optr {
 inline constexpr Field kDbank = FieldOf(kBlock, "OPTR", "DBANK");
 }  // namespace optr
