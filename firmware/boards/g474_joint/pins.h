@@ -17,6 +17,8 @@
 // gate driver's fault output as a hardware break input).
 #pragma once
 
+#include <cstdint>
+
 #include "hal/stm32g4/gpio.h"
 
 namespace mjc::board {
@@ -32,6 +34,20 @@ using stm32g4::Speed;
 inline constexpr Pin kJointCs{Port::kA, 4};
 inline constexpr Pin kBridgeEnable{Port::kB, 10};
 inline constexpr Pin kStatusLed{Port::kB, 11};
+
+// The gate driver's minimum low-side on-time per PWM period (stm32g4/bridge_pwm.h).
+// The board is laid out for a half-bridge driver whose high side runs from a bootstrap
+// capacitor (docs and schematic checks: the first power-up's list): that capacitor is
+// recharged through its diode only while the leg's low side conducts, and it loses the
+// high-side MOSFET's gate charge and the driver's quiescent current every period. 1 µs
+// a period is the order such drivers' datasheets ask for and leaves the capacitor's
+// recharge (a few ohms into a µF-class capacitor) time to replace that charge at 20 kHz;
+// it is on top of the 253 ns dead time, during which neither transistor conducts. With
+// CompareMargin(1000) = 107 counts the low side conducts 2 × 107 counts − 43 = 171
+// counts (1.006 µs) a period at a full command, and the largest mean voltage is
+// (4250 − 214) / 4250 = 94.96 % of the supply instead of 100 %. A charge-pump driver
+// (100 % duty allowed) would not need it; the value then only costs those 5 %.
+inline constexpr std::uint32_t kBridgeLowSideMinNs = 1000;
 
 inline constexpr PinConfig kPins[] = {
     // H-bridge: gate driver inputs, push-pull, fast edges (the dead time is 250 ns).
