@@ -24,7 +24,7 @@ inline constexpr const BlockDef* kAllBlocks[] = {
     &gpio::kBlocks[5], &gpio::kBlocks[6], &tim1::kBlock,        &tim3::kBlock,
     &spi1::kBlock,     &fdcan::kBlock,    &fdcan::kConfigBlock, &iwdg::kBlock,
     &nvic::kBlock,     &scb::kBlock,      &dwt::kBlock,         &dcb::kBlock,
-    &dbgmcu::kBlock,
+    &dbgmcu::kBlock,   &mpu::kBlock,
 };
 
 }  // namespace mjc::stm32g4
