@@ -12,6 +12,10 @@
 //    its outputs at their idle levels), no watchdog reset comes, and once resumed the
 //    firmware ticks on. Without the start-up's DBGMCU freeze bits the watchdog resets
 //    the chip 100 ms into the halt, after TIM1 had kept switching at the last duty.
+//  - The stack guards' MPU programming (EnableStackGuards) on the Cortex model: the
+//    model sees no RAM access, so the guard is put over a register block it does see;
+//    accesses there are denied, everywhere else the default map holds (PRIVDEFENA).
+//    The real overflow is proven on QEMU's Cortex-M4 (tests/target/stack_guard).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -22,6 +26,7 @@
 #include "hal/stm32g4/clock.h"
 #include "hal/stm32g4/gpio.h"
 #include "hal/stm32g4/mmio.h"
+#include "hal/stm32g4/mpu.h"
 #include "hal/stm32g4/regs/tim1.h"
 #include "mjc/g474board/virtual_board.h"
 #include "mjc/g474model/virtual_chip.h"
@@ -108,6 +113,30 @@ TEST_F(BridgeOnModel, WithoutTheMarginAFullCommandStarvesTheLowSide) {
   ToNextUpdate();
   EXPECT_EQ(OnTime(kLegALow), 0.0);
   EXPECT_LT(OnTime(kLegALow), board::kBridgeLowSideMinNs * 1e-9);
+}
+
+TEST_F(BridgeOnModel, StackGuardProgrammingDeniesOnlyTheGuard) {
+  const std::uint32_t guard = stm32g4::tim1::kBase;  // 1 KB, aligned to its size
+  const stm32g4::GuardRegion guards[] = {{guard, 1024}};
+  ASSERT_TRUE(stm32g4::EnableStackGuards(guards));
+  auto mpu_reports = [&] {
+    std::size_t n = 0;
+    for (const auto& v : chip_.violations().entries()) n += v.source == "MPU";
+    return n;
+  };
+  ASSERT_EQ(mpu_reports(), 0u);
+  (void)stm32g4::Read32(guard + 0x2C);
+  (void)stm32g4::Read32(guard + 0x3FC);
+  stm32g4::Write32(guard, 1);
+  EXPECT_EQ(mpu_reports(), 3u);
+  (void)stm32g4::Read32(guard + 0x400);  // the block above (SPI1): the default map
+  (void)stm32g4::Read32(0x40021000u);    // RCC
+  EXPECT_EQ(mpu_reports(), 3u);
+  // Malformed guards are refused before the MPU is touched.
+  const stm32g4::GuardRegion unaligned[] = {{guard + 0x100, 1024}};
+  EXPECT_FALSE(stm32g4::EnableStackGuards(unaligned));
+  const stm32g4::GuardRegion too_many[9] = {};
+  EXPECT_FALSE(stm32g4::EnableStackGuards(too_many));
 }
 
 TEST(VirtualBoardDebugHalt, FreezesTheWatchdogAndTakesTheBridgeToIdle) {

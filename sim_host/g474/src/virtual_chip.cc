@@ -397,6 +397,13 @@ std::uint32_t VirtualChip::Read(stm32g4::Address address, unsigned bytes) {
     log_.Report(now_, "bus", "unaligned or odd-sized read at " + Hex(address));
     return 0;
   }
+  if (cortex_.mpu_enabled()) {
+    if (const auto region = cortex_.MpuDenies(address, false)) {
+      ReportMpuFault(address, false, *region);
+      ServiceInterrupts();
+      return 0;
+    }
+  }
   const auto route = Decode(address);
   if (!route) {
     log_.Report(now_, "bus",
@@ -473,6 +480,13 @@ void VirtualChip::Write(stm32g4::Address address, std::uint32_t value, unsigned 
     log_.Report(now_, "bus", "unaligned or odd-sized write at " + Hex(address));
     return;
   }
+  if (cortex_.mpu_enabled()) {
+    if (const auto region = cortex_.MpuDenies(address, true)) {
+      ReportMpuFault(address, true, *region);
+      ServiceInterrupts();
+      return;
+    }
+  }
   const auto route = Decode(address);
   if (!route) {
     log_.Report(now_, "bus",
@@ -529,6 +543,14 @@ void VirtualChip::Write(stm32g4::Address address, std::uint32_t value, unsigned 
   if (route->model == &cortex_) lines_dirty_ = kAllLines;
   if (reset_pending_) DoReset(*reset_pending_);
   ServiceInterrupts(false);
+}
+
+void VirtualChip::ReportMpuFault(std::uint32_t address, bool write, int region) {
+  log_.Report(now_, "MPU",
+              std::string(write ? "write" : "read") + " at " + Hex(address) +
+                  (region < 0 ? " outside every region without PRIVDEFENA"
+                              : " denied by region " + std::to_string(region)) +
+                  ": MemManage (MMFSR.DACCVIOL) on the chip; not performed");
 }
 
 // ── Interrupts ────────────────────────────────────────────────────────────────────

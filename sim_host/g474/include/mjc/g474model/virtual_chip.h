@@ -237,6 +237,7 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   Dbgmcu dbgmcu_;
   bool halted_ = false;
   void ApplyDebugFreeze();
+  void ReportMpuFault(std::uint32_t address, bool write, int region);
   std::unique_ptr<As5047p> as5047p_;
   SpiWiring spi_wiring_;
   std::optional<PinId> enc_a_, enc_b_, can_tx_, can_rx_;
