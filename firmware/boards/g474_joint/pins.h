@@ -36,13 +36,15 @@ inline constexpr Pin kBridgeEnable{Port::kB, 10};
 inline constexpr Pin kStatusLed{Port::kB, 11};
 
 // The gate driver's minimum low-side on-time per PWM period (stm32g4/bridge_pwm.h).
-// The board is laid out for a half-bridge driver whose high side runs from a bootstrap
-// capacitor (docs and schematic checks: the first power-up's list): that capacitor is
-// recharged through its diode only while the leg's low side conducts, and it loses the
-// high-side MOSFET's gate charge and the driver's quiescent current every period. 1 µs
-// a period is the order such drivers' datasheets ask for and leaves the capacitor's
-// recharge (a few ohms into a µF-class capacitor) time to replace that charge at 20 kHz;
-// it is on top of the 253 ns dead time, during which neither transistor conducts. With
+// The firmware assumes a half-bridge driver whose high side runs from a bootstrap
+// capacitor, the safe assumption until the schematic says otherwise (check the driver's
+// type and its datasheet's minimum low-side on-time before the first power-up): that
+// capacitor is recharged through its diode only while the leg's low side conducts, and
+// it loses the high-side MOSFET's gate charge and the driver's quiescent current every
+// period. 1 µs a period is the order such drivers ask for (as recalled, not taken from
+// a given part's datasheet) and leaves the recharge (a few ohms into a µF-class
+// capacitor) time to replace that charge at 20 kHz; it comes on top of the 253 ns dead
+// time, during which neither transistor conducts. With
 // CompareMargin(1000) = 107 counts the low side conducts 2 × 107 counts − 43 = 171
 // counts (1.006 µs) a period at a full command, and the largest mean voltage is
 // (4250 − 214) / 4250 = 94.96 % of the supply instead of 100 %. A charge-pump driver
