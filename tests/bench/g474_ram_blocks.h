@@ -19,6 +19,7 @@ inline constexpr stm32g4::JointIoBlocks kRamBlocks{
     .joint_cs = {kRegs + 0x0C00, 4},
     .bridge_enable = {kRegs + 0x1000, 10},
     .cycle_counter = kRegs + 0x1400,
+    .bridge_low_side_min_ns = 1000,  // the joint board's (g474_joint/pins.h)
 };
 
 inline volatile std::uint32_t& Reg(stm32g4::Address a) {

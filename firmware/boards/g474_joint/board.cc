@@ -20,6 +20,7 @@
 #include <new>
 
 #include "hal/stm32g4/clock.h"
+#include "hal/stm32g4/debug.h"
 #include "hal/stm32g4/gpio.h"
 #include "hal/stm32g4/nvic.h"
 #include "hal/stm32g4/regs/irq.h"
@@ -139,6 +140,9 @@ void Run(const RunOptions& options) {
   stm32g4::EnablePeripheralClocks();
   for (const stm32g4::PinConfig& pin : kPins) stm32g4::ConfigurePin(pin);
 
+  // A debugger's halt stops the watchdog and takes TIM1's outputs to their idle levels
+  // (hal/stm32g4/debug.h), before either runs.
+  stm32g4::FreezeOnDebugHalt();
   // The watchdog from here on: everything below must keep making progress.
   (void)stm32g4::StartWatchdog();
 

@@ -35,7 +35,9 @@
 namespace mjc::board {
 
 inline constexpr stm32g4::JointIoBlocks kJointIoBlocks{
-    .joint_cs = stm32g4::At(kJointCs), .bridge_enable = stm32g4::At(kBridgeEnable)};
+    .joint_cs = stm32g4::At(kJointCs),
+    .bridge_enable = stm32g4::At(kBridgeEnable),
+    .bridge_low_side_min_ns = kBridgeLowSideMinNs};
 using JointIo = stm32g4::Stm32g4JointIo<kJointIoBlocks>;
 static_assert(hal::JointIo<JointIo>);
 

@@ -18,6 +18,8 @@
 // driver's fault output as a hardware break input).
 #pragma once
 
+#include <cstdint>
+
 #include "hal/stm32g4/gpio.h"
 
 namespace mjc::board {
@@ -33,6 +35,22 @@ using stm32g4::Speed;
 inline constexpr Pin kJointCs{Port::kA, 4};
 inline constexpr Pin kBridgeEnable{Port::kB, 10};
 inline constexpr Pin kStatusLed{Port::kB, 11};
+
+// The gate driver's minimum low-side on-time per PWM period (stm32g4/bridge_pwm.h).
+// The firmware assumes a half-bridge driver whose high side runs from a bootstrap
+// capacitor, the safe assumption until the schematic says otherwise (check the driver's
+// type and its datasheet's minimum low-side on-time before the first power-up): that
+// capacitor is recharged through its diode only while the leg's low side conducts, and
+// it loses the high-side MOSFET's gate charge and the driver's quiescent current every
+// period. 1 µs a period is the order such drivers ask for (as recalled, not taken from
+// a given part's datasheet) and leaves the recharge (a few ohms into a µF-class
+// capacitor) time to replace that charge at 20 kHz; it comes on top of the 253 ns dead
+// time, during which neither transistor conducts. With
+// CompareMargin(1000) = 107 counts the low side conducts 2 × 107 counts − 43 = 171
+// counts (1.006 µs) a period at a full command, and the largest mean voltage is
+// (4250 − 214) / 4250 = 94.96 % of the supply instead of 100 %. A charge-pump driver
+// (100 % duty allowed) would not need it; the value then only costs those 5 %.
+inline constexpr std::uint32_t kBridgeLowSideMinNs = 1000;
 
 inline constexpr PinConfig kPins[] = {
     // H-bridge: gate driver inputs, push-pull, fast edges (the dead time is 250 ns).

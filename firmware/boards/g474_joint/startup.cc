@@ -31,6 +31,7 @@
 #include "board.h"
 #include "hal/stm32g4/flash.h"
 #include "hal/stm32g4/mmio.h"
+#include "hal/stm32g4/mpu.h"
 #include "hal/stm32g4/nvic.h"
 #include "hal/stm32g4/regs/cortex_m4.h"
 #include "hal/stm32g4/regs/irq.h"
@@ -45,6 +46,9 @@ extern std::uint32_t __ccm_data_start[], __ccm_data_end[], __ccm_data_load[];
 extern std::uint32_t __ccm_bss_start[], __ccm_bss_end[];
 extern std::uint32_t __interrupt_stack_top[];
 extern std::uint32_t __main_stack_top[];
+// The no-access regions under the two stacks, and their size (a symbol's address).
+extern std::uint32_t __main_stack_guard[], __interrupt_stack_guard[];
+extern std::uint8_t __stack_guard_size[];
 extern const std::uint32_t __vector_table[];
 // The calibration pages' place in flash.
 extern const std::uint8_t __calibration_start[];
@@ -104,6 +108,18 @@ void StartUp() {
   Write32(ccr, Read32(ccr) | scb::ccr::kDiv0Trp.Bit());
   stm32g4::DataSyncBarrier();
   stm32g4::InstructionSyncBarrier();
+
+  // Each stack's guard a no-access MPU region (hal/stm32g4/mpu.h): an overflow faults
+  // there (MemManage, enabled above) at its first access. The linker script asserts
+  // their size and alignment; if the MPU refused them anyway, the image runs without
+  // (nothing better to do this early: no pin, no bus is up yet).
+  const auto address = [](const void* p) {
+    return static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(p));
+  };
+  const std::uint32_t guard_bytes = address(__stack_guard_size);
+  const stm32g4::GuardRegion guards[] = {{address(__main_stack_guard), guard_bytes},
+                                         {address(__interrupt_stack_guard), guard_bytes}};
+  (void)stm32g4::EnableStackGuards(guards);
 
   __libc_init_array();
   mjc::board::BringUp();

@@ -11,6 +11,11 @@ constexpr std::uint32_t kIser = 0xE100, kIcer = 0xE180, kIspr = 0xE200, kIcpr = 
 constexpr std::uint32_t kCpuid = 0xED00, kIcsr = 0xED04, kVtor = 0xED08, kAircr = 0xED0C,
                         kScr = 0xED10, kCcr = 0xED14, kShpr1 = 0xED18, kShcsr = 0xED24,
                         kCfsr = 0xED28, kHfsr = 0xED2C, kCpacr = 0xED88, kDemcr = 0xEDFC;
+// MPU (B3.5.5 - B3.5.9).
+constexpr std::uint32_t kMpuType = 0xED90, kMpuCtrl = 0xED94, kMpuRnr = 0xED98,
+                        kMpuRbar = 0xED9C, kMpuRasr = 0xEDA0;
+// RASR: XN, AP, TEX, S, C, B, SRD, SIZE, ENABLE.
+constexpr std::uint32_t kRasrBits = 0x173FFF3Fu;
 // Cortex-M4 r0p1 (the STM32G4's core, ST's CMSIS header: __CM4_REV 0x0001).
 constexpr std::uint32_t kCpuidValue = 0x410FC241u;
 }  // namespace
@@ -30,6 +35,32 @@ void Cortex::Reset() {
   demcr_ = 0;
   cyccnt_base_ = 0;
   cyccnt_origin_ = *cycles_;
+  mpu_ctrl_ = mpu_rnr_ = 0;
+  mpu_rbar_.fill(0);
+  mpu_rasr_.fill(0);
+}
+
+std::optional<int> Cortex::MpuDenies(std::uint32_t address, bool write) const {
+  if (!mpu_enabled() || (address >= 0xE0000000u && address < 0xE0100000u)) {
+    return std::nullopt;
+  }
+  for (int r = kMpuRegions - 1; r >= 0; --r) {
+    const std::uint32_t rasr = mpu_rasr_[static_cast<std::size_t>(r)];
+    if (!(rasr & 1u)) continue;
+    const unsigned size_log2 = ((rasr >> 1) & 0x1Fu) + 1;
+    const std::uint64_t size = std::uint64_t{1} << size_log2;
+    const std::uint64_t base = mpu_rbar_[static_cast<std::size_t>(r)] & ~(size - 1);
+    if (address < base || address >= base + size) continue;
+    // Eight subregions in regions of 256 bytes or more; a disabled one is not part of
+    // the region (the next lower region, or the background, decides there).
+    if (size >= 256 && ((rasr >> 8) >> ((address - base) / (size / 8)) & 1u)) continue;
+    const unsigned ap = (rasr >> 24) & 7u;
+    if (ap == 0 || ap == 4) return r;  // no access (100 is reserved)
+    if (write && ap >= 5) return r;    // read-only for privileged code
+    return std::nullopt;
+  }
+  if (mpu_ctrl_ & 4u) return std::nullopt;  // PRIVDEFENA: the default map
+  return -1;
 }
 
 std::uint32_t Cortex::Cyccnt() const {
@@ -93,6 +124,21 @@ bool Cortex::Read(const Access& a, std::uint32_t* v) {
     case kShpr1 + 4:
     case kShpr1 + 8:
       *v = shpr_[(o - kShpr1) / 4];
+      return true;
+    case kMpuType:
+      *v = static_cast<std::uint32_t>(kMpuRegions) << 8;  // DREGION; SEPARATE = 0
+      return true;
+    case kMpuCtrl:
+      *v = mpu_ctrl_;
+      return true;
+    case kMpuRnr:
+      *v = mpu_rnr_;
+      return true;
+    case kMpuRbar:
+      *v = (mpu_rbar_[mpu_rnr_ % kMpuRegions] & ~0x1Fu) | (mpu_rnr_ & 0xFu);
+      return true;
+    case kMpuRasr:
+      *v = mpu_rasr_[mpu_rnr_ % kMpuRegions];
       return true;
     default:
       return ReadTableRegister(Registers(), *this, o, v);
@@ -188,6 +234,40 @@ bool Cortex::Write(const Access& a) {
       return true;
     case kCpuid:
       return false;  // the model takes no write here: the bus reports a reserved register
+    case kMpuType:
+      return true;  // read-only
+    case kMpuCtrl:
+      a.Apply(&mpu_ctrl_, 7u);
+      return true;
+    case kMpuRnr:
+      if ((v & 0xFFu) >= kMpuRegions) {
+        log_->Report(now_, "MPU",
+                     "MPU_RNR = " + std::to_string(v & 0xFFu) + ": only 8 regions");
+      }
+      mpu_rnr_ = (v & 0xFFu) % kMpuRegions;
+      return true;
+    case kMpuRbar:
+      if (v & 0x10u) mpu_rnr_ = v & 0xFu & (kMpuRegions - 1);  // VALID: REGION selects
+      mpu_rbar_[mpu_rnr_] = v & ~0x1Fu;
+      return true;
+    case kMpuRasr: {
+      const std::uint32_t rasr = v & kRasrBits;
+      mpu_rasr_[mpu_rnr_] = rasr;
+      const unsigned size_field = (rasr >> 1) & 0x1Fu;
+      if ((rasr & 1u) && size_field < 4) {
+        log_->Report(now_, "MPU",
+                     "region " + std::to_string(mpu_rnr_) +
+                         " enabled with SIZE < 4 (under 32 bytes): "
+                         "UNPREDICTABLE (ARMv7-M B3.5.9)");
+      } else if ((rasr & 1u) && size_field < 31 &&
+                 (mpu_rbar_[mpu_rnr_] & ((2u << size_field) - 1u)) != 0) {
+        log_->Report(now_, "MPU",
+                     "region " + std::to_string(mpu_rnr_) + " base " +
+                         Hex(mpu_rbar_[mpu_rnr_]) +
+                         " not aligned to its size: UNPREDICTABLE");
+      }
+      return true;
+    }
     case kDemcr: {
       const std::uint32_t count = Cyccnt();
       WriteTableRegister(Registers(), *this, a);

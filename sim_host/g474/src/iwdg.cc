@@ -10,7 +10,7 @@ constexpr Picoseconds LsiCycles(double n, double lsi_hz) {
 }  // namespace
 
 void Iwdg::Reset() {
-  running_ = unlocked_ = false;
+  running_ = unlocked_ = frozen_ = false;
   pr_ = 0;
   rlr_ = winr_ = counter_ = 0xFFF;
   prescale_count_ = 0;
@@ -29,7 +29,7 @@ void Iwdg::Expire(const char* why) {
 void Iwdg::Advance(Picoseconds now) {
   const Picoseconds dt = now - now_;
   now_ = now;
-  if (!running_) return;
+  if (!running_ || frozen_) return;
   std::uint64_t cycles = lsi_ticks_.Advance(dt, rcc_->lsi_hz());
   const std::uint32_t div = Divider();
   while (cycles > 0 && running_) {
@@ -53,7 +53,7 @@ Picoseconds Iwdg::NextEvent() const {
   for (Picoseconds t : {pvu_until_, rvu_until_, wvu_until_}) {
     if (t > now_ && t < next) next = t;
   }
-  if (running_ && rcc_->lsi_hz() > 0) {
+  if (running_ && !frozen_ && rcc_->lsi_hz() > 0) {
     const std::uint64_t cycles =
         static_cast<std::uint64_t>(counter_ + 1) * Divider() - prescale_count_;
     const Picoseconds t = now_ + lsi_ticks_.UntilTicks(cycles, rcc_->lsi_hz());

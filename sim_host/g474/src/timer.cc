@@ -130,9 +130,9 @@ void Timer::Tick(std::uint64_t n) {
 void Timer::Advance(Picoseconds now) {
   const Picoseconds dt = now - now_;
   now_ = now;
-  const std::uint64_t hz = !clock_on_                 ? 0
-                           : kind_ == Kind::kAdvanced ? rcc_->tim_pclk2_whole_hz()
-                                                      : rcc_->tim_pclk1_whole_hz();
+  const std::uint64_t hz = !clock_on_ || debug_stopped_ ? 0
+                           : kind_ == Kind::kAdvanced   ? rcc_->tim_pclk2_whole_hz()
+                                                        : rcc_->tim_pclk1_whole_hz();
   const std::uint64_t clocks = clock_.Advance(dt, hz);
   if (!(cr1_ & kCen) || EncoderMode() || Sms() != 0) {
     return;
@@ -165,7 +165,9 @@ Picoseconds Timer::NextEvent() const {
 }
 
 Picoseconds Timer::NextUpdate() const {
-  if (!clock_on_ || !(cr1_ & kCen) || Sms() != 0 || (cr1_ & kUdis)) return kNever;
+  if (!clock_on_ || debug_stopped_ || !(cr1_ & kCen) || Sms() != 0 || (cr1_ & kUdis)) {
+    return kNever;
+  }
   const std::uint64_t ticks = TicksToNextUpdate();
   if (ticks == 0) return kNever;
   const std::uint64_t div = static_cast<std::uint64_t>(psc_active_) + 1;
@@ -207,7 +209,7 @@ void Timer::OnInput(int channel, bool level) {
   const std::size_t i = static_cast<std::size_t>(channel - 1);
   if (input_[i] == level) return;
   input_[i] = level;
-  if (channel > 2 || !(cr1_ & kCen) || !EncoderMode()) return;
+  if (channel > 2 || !(cr1_ & kCen) || !EncoderMode() || debug_stopped_) return;
   // TIxFPx: the input after the polarity selection (CCxP inverts).
   const bool ti1 = input_[0] != ((ccer_ >> 1) & 1u);
   const bool ti2 = input_[1] != ((ccer_ >> 5) & 1u);
@@ -318,8 +320,10 @@ OutputWave Timer::Wave(int ch, bool complementary) const {
     if (complementary || !cce) return {};
     return level(RefDuty(ch));
   }
-  if (!(bdtr_ & kMoe)) {
-    // Main output disabled: Hi-Z with OSSI = 0, else the idle level OISx/OISxN.
+  if (!(bdtr_ & kMoe) || debug_stopped_) {
+    // Main output disabled (or the counter frozen by the debugger, which disables the
+    // outputs as a cleared MOE does): Hi-Z with OSSI = 0, else the idle level
+    // OISx/OISxN.
     if (!(bdtr_ & kOssi) || !(cce || ccne)) return {};
     const bool ois = (cr2_ >> (8 + 2 * (ch - 1) + (complementary ? 1 : 0))) & 1u;
     return OutputWave{true, ois ? 1.0 : 0.0};

@@ -242,6 +242,8 @@ void VirtualChip::Bring(const Route& route) {
   Peripheral* m = route.model;
   if (m == &cortex_) {
     cortex_.Advance(now_);
+  } else if (m == &dbgmcu_) {
+    return;  // no time base: its bits act only while the core is halted
   } else if (m == &rcc_ || m == &pwr_ || (m == &flash_ && route.kind == 0)) {
     AdvanceAll();  // clocks and latency: every model's time base may change
   } else if (m == &fdcan1_) {
@@ -269,7 +271,7 @@ void VirtualChip::Settle(const Route& route) {
   if (m == &rcc_ || m == &pwr_ || (m == &flash_ && route.kind == 0)) {
     UpdateGates();
     AdvanceAll();
-  } else if (m == &cortex_) {
+  } else if (m == &cortex_ || m == &dbgmcu_) {
     return;  // no timed events (DWT counts CPU cycles; the NVIC is sampled below)
   } else if (m == &iwdg_) {
     // Starting the watchdog forces the LSI on (RM0440 IWDG): the RCC's next event too.
@@ -345,6 +347,9 @@ void VirtualChip::UpdateGates() {
 std::optional<VirtualChip::Route> VirtualChip::Decode(std::uint32_t a) {
   // Most frequent first: the core's registers (the DWT's counter in the drivers' hold
   // loops), then the peripherals by their 1 KB block.
+  if (a >= Dbgmcu::kBase && a < Dbgmcu::kBase + 0x400) {
+    return Route{&dbgmcu_, a - Dbgmcu::kBase, std::nullopt, 0};
+  }
   if (a >= 0xE0000000u && a < 0xE0100000u) {
     return Route{&cortex_, a - Cortex::kBase, std::nullopt, 0};
   }
@@ -397,6 +402,13 @@ std::uint32_t VirtualChip::Read(stm32g4::Address address, unsigned bytes) {
   if ((bytes != 2 && bytes != 4) || (address & (bytes - 1)) != 0) {
     log_.Report(now_, "bus", "unaligned or odd-sized read at " + Hex(address));
     return 0;
+  }
+  if (cortex_.mpu_enabled()) {
+    if (const auto region = cortex_.MpuDenies(address, false)) {
+      ReportMpuFault(address, false, *region);
+      ServiceInterrupts();
+      return 0;
+    }
   }
   const auto route = Decode(address);
   if (!route) {
@@ -475,6 +487,13 @@ void VirtualChip::Write(stm32g4::Address address, std::uint32_t value, unsigned 
     log_.Report(now_, "bus", "unaligned or odd-sized write at " + Hex(address));
     return;
   }
+  if (cortex_.mpu_enabled()) {
+    if (const auto region = cortex_.MpuDenies(address, true)) {
+      ReportMpuFault(address, true, *region);
+      ServiceInterrupts();
+      return;
+    }
+  }
   const auto route = Decode(address);
   if (!route) {
     log_.Report(now_, "bus",
@@ -524,12 +543,21 @@ void VirtualChip::Write(stm32g4::Address address, std::uint32_t value, unsigned 
   }
   if (!ok) log_.Report(now_, "bus", "write at " + Hex(address) + ": reserved register");
   if (route->model == &flash_ && acc.offset == 0) CheckClocks();
+  if (route->model == &dbgmcu_ && halted_) ApplyDebugFreeze();  // a debugger's write
   Settle(*route);  // the clock gates too, after an RCC write
   // An NVIC write (a pending bit cleared while its line is still high) has every line
   // sampled again; Settle marked the lines of the other blocks.
   if (route->model == &cortex_) lines_dirty_ = kAllLines;
   if (reset_pending_) DoReset(*reset_pending_);
   ServiceInterrupts(false);
+}
+
+void VirtualChip::ReportMpuFault(std::uint32_t address, bool write, int region) {
+  log_.Report(now_, "MPU",
+              std::string(write ? "write" : "read") + " at " + Hex(address) +
+                  (region < 0 ? " outside every region without PRIVDEFENA"
+                              : " denied by region " + std::to_string(region)) +
+                  ": MemManage (MMFSR.DACCVIOL) on the chip; not performed");
 }
 
 // ── Interrupts ────────────────────────────────────────────────────────────────────
@@ -583,7 +611,8 @@ void VirtualChip::ServiceInterrupts(bool sample) {
       }
     }
     sample = true;  // after a handler: its exit may leave a line high
-    if (primask_ || !cortex_.AnyCandidate()) return;
+    // A halted core takes nothing (the NVIC still records what is pending).
+    if (halted_ || primask_ || !cortex_.AnyCandidate()) return;
     int best = -1;
     std::uint32_t best_priority = 0;
     for (int n = 0; n < Cortex::kIrqCount; ++n) {
@@ -692,10 +721,34 @@ void VirtualChip::PowerCut() {
   DoReset(ResetCause::kPowerCut);
 }
 
+// ── A debugger ────────────────────────────────────────────────────────────────────
+
+void VirtualChip::ApplyDebugFreeze() {
+  AdvanceAll();  // every model counts up to the instant the freeze changes
+  iwdg_.SetFrozen(halted_ && dbgmcu_.iwdg_stop());
+  tim1_.SetDebugStopped(halted_ && dbgmcu_.tim1_stop());
+  tim3_.SetDebugStopped(halted_ && dbgmcu_.tim3_stop());
+  AdvanceAll();  // their next events as frozen (or running again)
+}
+
+void VirtualChip::Halt() {
+  Sync(now_);
+  halted_ = true;
+  ApplyDebugFreeze();
+}
+
+void VirtualChip::Resume() {
+  halted_ = false;
+  ApplyDebugFreeze();
+  ServiceInterrupts();
+}
+
 void VirtualChip::DoReset(ResetCause cause) {
   reset_pending_.reset();
   ++resets_;
+  halted_ = false;
   if (cause == ResetCause::kPowerCut) {
+    dbgmcu_.PowerOn();
     flash_.PowerLost();
     rcc_.Reset();
     rcc_.PowerOn();
@@ -719,7 +772,10 @@ void VirtualChip::DoReset(ResetCause cause) {
   spi1_.Reset();
   fdcan1_.Reset();
   iwdg_.Reset();
+  tim1_.SetDebugStopped(false);
+  tim3_.SetDebugStopped(false);
   cortex_.Reset();
+  dbgmcu_.Reset();
   rules_.Reset();
   active_stack_.clear();
   in_nmi_ = false;

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "scripted_space.h"
@@ -22,28 +23,55 @@ constexpr Address kTim1 = 0x40012C00, kTim3 = 0x40000400, kSpi1 = 0x40013000;
 constexpr Address kGpioaBsrr = 0x48000018, kGpiobBsrr = 0x48000418;
 
 constexpr JointIoBlocks kBlocks{.joint_cs = At(Pin{Port::kA, 4}),
-                                .bridge_enable = At(Pin{Port::kB, 12})};
+                                .bridge_enable = At(Pin{Port::kB, 12}),
+                                .bridge_low_side_min_ns = 1000};
 using Io = Stm32g4JointIo<kBlocks>;
 static_assert(hal::JointIo<Io>);
 
 TEST(Stm32g4BridgePwm, ComparesMatchAnIndependentComputation) {
-  // Leg A high for (1 + d)/2 of ARR = 4250 counts, rounded half up; leg B the rest.
+  // Leg A high for (1 + d)/2 of ARR = 4250 counts, rounded half up; leg B the rest; no
+  // margin: the whole range.
   for (int raw : {-32768, -32767, -16384, -1, 0, 1, 1000, 16384, 32767}) {
     const Duty d = Duty::FromRaw(static_cast<std::int16_t>(raw));
     const double exact = 4250.0 * (1.0 + raw / 32768.0) / 2.0;
-    const BridgeCompare c = CompareForDuty(d);
+    const BridgeCompare c = CompareForDuty(d, 0);
     EXPECT_EQ(c.leg_a, static_cast<std::uint16_t>(std::floor(exact + 0.5))) << raw;
     EXPECT_EQ(c.leg_a + c.leg_b, 4250) << raw;
   }
-  EXPECT_EQ(CompareForDuty(Duty::FromRaw(0)).leg_a, 2125);
-  EXPECT_EQ(CompareForDuty(Duty::FromRaw(16384)).leg_a, 3188);  // 3187.5 rounds up
-  EXPECT_EQ(CompareForDuty(Duty::FromRaw(-32768)).leg_a, 0);
-  EXPECT_EQ(CompareForDuty(Duty::FromRaw(32767)).leg_a, 4250);
+  EXPECT_EQ(CompareForDuty(Duty::FromRaw(0), 0).leg_a, 2125);
+  EXPECT_EQ(CompareForDuty(Duty::FromRaw(16384), 0).leg_a, 3188);  // 3187.5 rounds up
+  EXPECT_EQ(CompareForDuty(Duty::FromRaw(-32768), 0).leg_a, 0);
+  EXPECT_EQ(CompareForDuty(Duty::FromRaw(32767), 0).leg_a, 4250);
   // Every raw value: within half a count of (1 + d)/2 × ARR, and symmetric.
   for (int raw = -32768; raw <= 32767; ++raw) {
-    const BridgeCompare c = CompareForDuty(Duty::FromRaw(static_cast<std::int16_t>(raw)));
+    const BridgeCompare c =
+        CompareForDuty(Duty::FromRaw(static_cast<std::int16_t>(raw)), 0);
     ASSERT_LE(std::abs(c.leg_a - 4250.0 * (1.0 + raw / 32768.0) / 2.0), 0.5) << raw;
   }
+}
+
+TEST(Stm32g4BridgePwm, MarginKeepsEachLowSideOnItsMinimum) {
+  // Centre-aligned PWM mode 1: OCxREF is low for 2 × (ARR − CCR) counts a period, the
+  // low side on for that less one dead time (43 counts at 170 MHz). The margin for
+  // 1 µs, computed here in double: ⌈(1 µs + 43 / 170 MHz) × 170 MHz / 2⌉ = 107.
+  const double f = 170e6, dead = 43 / f;
+  const auto n = static_cast<std::uint32_t>(std::ceil((1e-6 + dead) * f / 2));
+  EXPECT_EQ(n, 107u);
+  static_assert(CompareMargin(1000) == 107);
+  EXPECT_GE(2 * n / f - dead, 1e-6);
+  EXPECT_LT(2 * (n - 1) / f - dead, 1e-6) << "the smallest margin that does it";
+  for (int raw = -32768; raw <= 32767; ++raw) {
+    const BridgeCompare c =
+        CompareForDuty(Duty::FromRaw(static_cast<std::int16_t>(raw)), n);
+    const double exact = std::floor(4250.0 * (1.0 + raw / 32768.0) / 2.0 + 0.5);
+    ASSERT_EQ(c.leg_a, std::clamp(exact, double(n), 4250.0 - n)) << raw;
+    ASSERT_EQ(c.leg_a + c.leg_b, 4250) << raw;
+    ASSERT_GE(2 * (4250 - c.leg_a) / f - dead, 1e-6) << raw;  // leg A's low side
+    ASSERT_GE(2 * (4250 - c.leg_b) / f - dead, 1e-6) << raw;  // leg B's low side
+  }
+  // What it costs: the largest mean voltage, (CCR1 − CCR2) / ARR at a full command.
+  const BridgeCompare full = CompareForDuty(Duty::FromRaw(32767), n);
+  EXPECT_NEAR((full.leg_a - full.leg_b) / 4250.0, 1 - 2 * 107 / 4250.0, 1e-12);
 }
 
 TEST(Stm32g4BridgePwm, DeadTimeEncoding) {
@@ -56,7 +84,7 @@ TEST(Stm32g4BridgePwm, DeadTimeEncoding) {
 
 TEST(Stm32g4BridgePwm, InitSequence) {
   ScriptedSpace s;
-  Stm32g4BridgePwm<kTim1>::Init();
+  Stm32g4BridgePwm<kTim1, 107>::Init();
   EXPECT_EQ(s.Peek(kTim1 + 0x2C), 4250u);  // ARR: 170 MHz / (2 × 20 kHz)
   EXPECT_EQ(s.Peek(kTim1 + 0x30), 3u);     // RCR: update every 4 half-periods
   EXPECT_EQ(s.Peek(kTim1 + 0x28), 0u);     // PSC

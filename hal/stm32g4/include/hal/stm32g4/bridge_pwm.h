@@ -30,6 +30,19 @@
 // even if the enable line were stuck high. The same levels are the idle states
 // (CR2.OISx = 0, OISxN = 1, BDTR.OSSI = 1) that the outputs take when MOE is cleared —
 // what EmergencyStop() and a fault handler do, in one store, whatever the counter does.
+//
+// The low side's minimum on-time. With CCRx = ARR, OCxREF would be low for a single
+// count (5.9 ns) at the top of each period, far shorter than the dead time, so the low
+// side would never turn on (RM0440 §28.3.16: the complementary output's active phase
+// starts one dead time after the reference's edge, and a pulse shorter than the dead
+// time gives none). A gate driver whose high side is supplied by a bootstrap capacitor
+// recharges that capacitor only while its own leg's low side conducts: at a sustained
+// full duty it would sag into its under-voltage lock-out and the high side would drop.
+// So each leg's compare value stays within [N, ARR − N]: OCxREF is low for at least 2N
+// counts around the top of the count, and the low side conducts 2N counts less one dead
+// time. N follows from the board's minimum on-time (JointIoBlocks, a property of the
+// gate driver it carries) by CompareMargin() below; it costs 2N/ARR of the largest mean
+// voltage (the board's figure is in its pin table's comment).
 #pragma once
 
 #include <cstdint>
@@ -80,6 +93,17 @@ inline constexpr std::uint32_t kDeadTimeCode = DeadTimeCode(kDeadTimeNs, kTimerC
 static_assert(kDeadTimeCode == 43);
 static_assert(DeadTimePs(kDeadTimeCode, kTimerClockHz) >= kDeadTimeNs * 1000ull);
 
+// The compare margin N (counts, see the header comment) that keeps a leg's low side on
+// for at least `min_on_ns` every period: OCxREF low for 2N counts of 1/f, less one dead
+// time, ≥ min_on_ns, i.e. N = ⌈(min_on + dead time) × f / 2⌉.
+consteval std::uint32_t CompareMargin(std::uint32_t min_on_ns) {
+  const std::uint64_t ps =
+      std::uint64_t{min_on_ns} * 1000u + DeadTimePs(kDeadTimeCode, kTimerClockHz);
+  constexpr std::uint64_t kTwoSecondsPs = 2'000'000'000'000ull;
+  return static_cast<std::uint32_t>((ps * kTimerClockHz + kTwoSecondsPs - 1) /
+                                    kTwoSecondsPs);
+}
+
 // Compare values of the two legs for a duty.
 struct BridgeCompare {
   std::uint16_t leg_a = 0;  // CCR1
@@ -88,17 +112,23 @@ struct BridgeCompare {
 
 // d ∈ [−1, 1) (Q15, raw r ∈ [−32768, 32767]): leg A high for (1 + d)/2 of the period,
 // leg B for (1 − d)/2, so the motor's mean voltage is d × V. CCR1 = round(ARR × (32768
-// + r) / 65536), CCR2 = ARR − CCR1: the pair always sums to ARR, d = 0 gives 2125/2125
-// (no mean voltage), the extremes 4250/0 and 0/4250 (one leg's high side on for the
-// whole period but for its dead time). Every raw value is legal.
-constexpr BridgeCompare CompareForDuty(Duty duty) {
+// + r) / 65536) clamped to [margin, ARR − margin], CCR2 = ARR − CCR1: the pair always
+// sums to ARR (both legs stay within the margin), d = 0 gives 2125/2125 (no mean
+// voltage), the extremes ARR − margin / margin: each low side conducts its minimum
+// on-time even at a full command. Every raw value is legal.
+constexpr BridgeCompare CompareForDuty(Duty duty, std::uint32_t margin) {
   const auto offset = static_cast<std::uint32_t>(std::int32_t{duty.raw()} + 32768);
-  const std::uint32_t a = (kPwmArr * offset + 32768u) >> 16;
+  std::uint32_t a = (kPwmArr * offset + 32768u) >> 16;
+  a = a < margin ? margin : a;
+  a = a > kPwmArr - margin ? kPwmArr - margin : a;
   return {static_cast<std::uint16_t>(a), static_cast<std::uint16_t>(kPwmArr - a)};
 }
 
-template <Address kTim = tim1::kBase>
+// kMargin: CompareMargin() of the board's gate driver (at most a quarter period).
+template <Address kTim, std::uint32_t kMargin>
 class Stm32g4BridgePwm {
+  static_assert(kMargin <= kPwmArr / 4, "a margin beyond a quarter period");
+
  public:
   // Configures TIM1 (its clock and the output pins' alternate functions must be set;
   // the bridge's enable line must be low) and starts it with both low sides on and the
@@ -142,7 +172,7 @@ class Stm32g4BridgePwm {
 
   // The tick's duty, from the next update on.
   static void ISR_SetDuty(Duty duty) {
-    const BridgeCompare c = CompareForDuty(duty);
+    const BridgeCompare c = CompareForDuty(duty, kMargin);
     Write32(kTim + tim1::kCcr1, c.leg_a);
     Write32(kTim + tim1::kCcr2, c.leg_b);
   }

@@ -36,12 +36,20 @@ struct JointIoBlocks {
   PortPin joint_cs;                    // the AS5047P's chip select (output, idle high)
   PortPin bridge_enable;               // the H-bridge's enable line (output, idle low)
   Address cycle_counter = dwt::kBase;  // the DWT block (tick duration, SPI hold times)
+  // The gate driver's minimum low-side on-time per PWM period, in ns (bridge_pwm.h: a
+  // bootstrap-supplied high side recharges only then). A property of the board's gate
+  // driver; every board states it (0 is refused below).
+  std::uint32_t bridge_low_side_min_ns = 0;
 };
 
 template <JointIoBlocks kBlocks>
 class Stm32g4JointIo {
+  static_assert(kBlocks.bridge_low_side_min_ns > 0,
+                "the board's gate driver needs its minimum low-side on-time");
+
  public:
-  using Pwm = Stm32g4BridgePwm<kBlocks.bridge_timer>;
+  using Pwm = Stm32g4BridgePwm<kBlocks.bridge_timer,
+                               CompareMargin(kBlocks.bridge_low_side_min_ns)>;
   using Encoder = Stm32g4QuadratureEncoder<kBlocks.encoder_timer>;
   using JointEncoder =
       As5047p<kBlocks.joint_spi, kBlocks.joint_cs, kBlocks.cycle_counter>;

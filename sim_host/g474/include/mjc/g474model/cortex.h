@@ -11,7 +11,21 @@
 // Interrupt scheduling itself (pending → active, preemption) lives in VirtualChip,
 // which reads this model's state.
 //
-// Not covered: SysTick, MPU, FPU context control, fault status registers (reads 0),
+// MPU (B3.5): MPU_TYPE (8 regions), MPU_CTRL (ENABLE, HFNMIENA, PRIVDEFENA), MPU_RNR,
+// MPU_RBAR (VALID selects the region) and MPU_RASR for each region; MpuDenies() checks
+// an access against them as a privileged data access (all of this firmware runs
+// privileged): the highest-numbered enabled region that holds the address decides
+// (subregions disabled by SRD excluded), AP 000 denies everything, AP 101/110/111 deny
+// writes, no region → the default map with PRIVDEFENA, a fault without; the private
+// peripheral bus (0xE000_0000 - 0xE00F_FFFF) is never checked. The virtual chip checks
+// only the accesses it sees — register and flash accesses, never RAM or instruction
+// fetches (no instruction is executed) — and reports a denied one as a violation (the
+// chip would take MemManage) without performing it. A size below 32 bytes or a base
+// not aligned to the region's size (UNPREDICTABLE in the manual) is reported too.
+//
+// Not covered: SysTick, the RBAR/RASR alias registers, unprivileged execution
+// (CONTROL.nPRIV), the MPU's effect on instruction fetches, stacking and HardFault/NMI
+// handlers (HFNMIENA), FPU context control, fault status registers (reads 0),
 // BASEPRI/FAULTMASK, ITM/TPIU.
 #pragma once
 
@@ -19,6 +33,7 @@
 #include <bitset>
 #include <cstdint>
 #include <functional>
+#include <optional>
 
 #include "mjc/g474model/common.h"
 #include "mjc/g474model/register_table.h"
@@ -63,6 +78,12 @@ class Cortex final : public Peripheral {
   // DWT_CYCCNT as a read returns it.
   std::uint32_t cyccnt() const { return Cyccnt(); }
 
+  static constexpr int kMpuRegions = 8;  // Cortex-M4 with its MPU (TRM: 8 regions)
+  // The MPU region that denies a privileged data access at `address` (`write`), -1 for
+  // the background map without PRIVDEFENA; nullopt when the access is allowed.
+  std::optional<int> MpuDenies(std::uint32_t address, bool write) const;
+  bool mpu_enabled() const { return (mpu_ctrl_ & 1u) != 0; }
+
   // Called on AIRCR.SYSRESETREQ with the right VECTKEY.
   void SetResetRequestHook(std::function<void()> hook) { reset_hook_ = std::move(hook); }
 
@@ -79,6 +100,8 @@ class Cortex final : public Peripheral {
   std::uint32_t vtor_ = 0, aircr_ = 0, scr_ = 0, ccr_ = 0, cpacr_ = 0;
   std::array<std::uint32_t, 3> shpr_{};
   std::uint32_t dwt_ctrl_ = 0, demcr_ = 0;
+  std::uint32_t mpu_ctrl_ = 0, mpu_rnr_ = 0;
+  std::array<std::uint32_t, kMpuRegions> mpu_rbar_{}, mpu_rasr_{};
   // CYCCNT = (cycles - cycles at the last start or write) + value then, while running.
   std::uint32_t cyccnt_base_ = 0;
   std::uint64_t cyccnt_origin_ = 0;

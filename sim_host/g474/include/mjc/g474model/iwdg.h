@@ -7,8 +7,12 @@
 // RM0440's timeout table has it (RL = 0 gives one tick) — the watchdog asks for a reset.
 // Window option: a reload while the counter is above WINR asks for a reset too.
 //
+// Under the debugger: with DBG_IWDG_STOP the counter stops while the core is halted
+// (SetFrozen, from VirtualChip's Halt); without it the watchdog counts on and resets
+// the chip at the end of its count, halted or not.
+//
 // Not covered: the hardware-watchdog option byte (IWDG_SW = 0 starting it at reset),
-// freezing in Stop/Standby or under the debugger (DBGMCU), the early-wakeup interrupt.
+// freezing in Stop/Standby, the early-wakeup interrupt.
 #pragma once
 
 #include <cstdint>
@@ -35,6 +39,10 @@ class Iwdg final : public Peripheral {
   // Called when the watchdog asks for a reset (the chip resets with IWDGRSTF).
   void SetExpiryHook(std::function<void()> hook) { expiry_hook_ = std::move(hook); }
   bool running() const { return running_; }
+  // The core halted by a debugger with DBGMCU_APB1FZR1.DBG_IWDG_STOP set: the counter
+  // stops where it is (and goes on from there). The caller advances the model to the
+  // present first.
+  void SetFrozen(bool frozen) { frozen_ = frozen; }
   std::uint32_t counter() const { return counter_; }
 
  private:
@@ -50,6 +58,7 @@ class Iwdg final : public Peripheral {
   std::uint32_t prescale_count_ = 0;  // LSI cycles into the present counter tick
   bool running_ = false;
   bool unlocked_ = false;
+  bool frozen_ = false;
   std::uint32_t pr_ = 0, rlr_ = 0xFFF, winr_ = 0xFFF;
   std::uint32_t counter_ = 0xFFF;
   // Registers that are still being copied to the LSI domain, and until when.

@@ -27,6 +27,9 @@
 // level), one-pulse mode, retriggerable/combined/asymmetric PWM, break inputs, DMA,
 // slave modes other than encoder, the clock-plus-direction encoder modes, the index
 // (ECR), dithering, UIFREMAP, input filters (ignored: edges are clean).
+//
+// Debug: the DBGMCU freeze (SetDebugStopped, from VirtualChip's Halt) as the manual's
+// "Debug mode" paragraph has it.
 #pragma once
 
 #include <array>
@@ -74,6 +77,14 @@ class Timer final : public Peripheral {
   // masks it. The world steps what the outputs drive at these times.
   Picoseconds NextUpdate() const;
   std::uint32_t counter() const { return cnt_; }
+  // The core halted by a debugger with this timer's DBGMCU freeze bit set (RM0440
+  // "Debug mode"): the counter stops (encoder edges meanwhile are not counted), and an
+  // advanced timer's outputs are disabled as if MOE were cleared — the idle levels
+  // OISx/OISxN with OSSI = 1, released (Hi-Z) with OSSI = 0. MOE itself is unchanged,
+  // so the outputs come back when the core runs again. The caller advances the model
+  // to the present first.
+  void SetDebugStopped(bool stopped) { debug_stopped_ = stopped; }
+  bool debug_stopped() const { return debug_stopped_; }
   double kernel_hz() const;
   // The counter clock's update period (an update event every … seconds) at the present
   // configuration, for reports.
@@ -117,6 +128,7 @@ class Timer final : public Peripheral {
   bool down_ = false;  // centre-aligned: counting down now
   std::array<bool, 4> input_{};
   bool reported_mode_ = false;
+  bool debug_stopped_ = false;
 };
 
 }  // namespace mjc::g474model

@@ -54,6 +54,7 @@
 #include "mjc/g474model/as5047p.h"
 #include "mjc/g474model/common.h"
 #include "mjc/g474model/cortex.h"
+#include "mjc/g474model/dbgmcu.h"
 #include "mjc/g474model/fdcan.h"
 #include "mjc/g474model/flash.h"
 #include "mjc/g474model/gpio.h"
@@ -158,6 +159,18 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   // The board's PB8 from now on (sampled at the next reset).
   void SetBoot0Pin(Boot0Pin pin);
 
+  // ── A debugger ──────────────────────────────────────────────────────────────────
+  // The core halted (DHCSR.C_HALT) and running again: while halted no interrupt is
+  // taken and the firmware runs no code (the owner moves time on with AdvanceTo), and
+  // each peripheral does what its DBGMCU freeze bit says (dbgmcu.h): the IWDG counts
+  // on and resets the chip without DBG_IWDG_STOP, TIM1 goes on driving its outputs at
+  // the last compare values without DBG_TIM1_STOP, with it the counter stops and the
+  // outputs take their MOE-cleared levels; TIM3 counts on without DBG_TIM3_STOP. A
+  // reset ends the halt (the debugger's reset vector catch is not modelled).
+  void Halt();
+  void Resume();
+  bool halted() const { return halted_; }
+
   // ── The world's side ────────────────────────────────────────────────────────────
   // The motor's quadrature encoder: channels A and B on these pins.
   void AttachEncoder(PinId a, PinId b);
@@ -186,6 +199,7 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   Fdcan& fdcan1() { return fdcan1_; }
   Iwdg& iwdg() { return iwdg_; }
   Cortex& cortex() { return cortex_; }
+  Dbgmcu& dbgmcu() { return dbgmcu_; }
   ViolationLog& violations() { return log_; }
 
  private:
@@ -252,6 +266,10 @@ class VirtualChip final : public stm32g4::RegisterSpace {
   Fdcan fdcan1_;
   Iwdg iwdg_;
   Cortex cortex_;
+  Dbgmcu dbgmcu_;
+  bool halted_ = false;
+  void ApplyDebugFreeze();
+  void ReportMpuFault(std::uint32_t address, bool write, int region);
   std::unique_ptr<As5047p> as5047p_;
   SpiWiring spi_wiring_;
   std::optional<PinId> enc_a_, enc_b_, can_tx_, can_rx_;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "hal/stm32g4/regs/cortex_m4.h"
+#include "hal/stm32g4/regs/dbgmcu.h"
 #include "hal/stm32g4/regs/fdcan.h"
 #include "hal/stm32g4/regs/flash.h"
 #include "hal/stm32g4/regs/gpio.h"
@@ -23,6 +24,7 @@ inline constexpr const BlockDef* kAllBlocks[] = {
     &gpio::kBlocks[5], &gpio::kBlocks[6], &tim1::kBlock,        &tim3::kBlock,
     &spi1::kBlock,     &fdcan::kBlock,    &fdcan::kConfigBlock, &iwdg::kBlock,
     &nvic::kBlock,     &scb::kBlock,      &dwt::kBlock,         &dcb::kBlock,
+    &dbgmcu::kBlock,   &mpu::kBlock,
 };
 
 }  // namespace mjc::stm32g4

@@ -169,4 +169,58 @@ inline constexpr Field kTrcena = FieldOf(kBlock, "DEMCR", "TRCENA");
 
 }  // namespace dcb
 
+// The memory protection unit (ARMv7-M B3.5; the Cortex-M4's has 8 regions, TRM §4.2):
+// MPU_TYPE (DREGION: how many regions, 0 without an MPU), MPU_CTRL, the region number
+// register and the selected region's base address and attribute/size registers.
+namespace mpu {
+
+inline constexpr FieldDef kTypeFields[] = {{"SEPARATE", 0, 1}, {"DREGION", 8, 8}};
+inline constexpr FieldDef kCtrlFields[] = {
+    {"ENABLE", 0, 1},
+    {"HFNMIENA", 1, 1},    // the MPU also during HardFault/NMI/FAULTMASK handlers
+    {"PRIVDEFENA", 2, 1},  // privileged accesses outside every region: the default map
+};
+inline constexpr FieldDef kRnrFields[] = {{"REGION", 0, 8}};
+inline constexpr FieldDef kRbarFields[] = {
+    {"REGION", 0, 4}, {"VALID", 4, 1}, {"ADDR", 5, 27}};
+inline constexpr FieldDef kRasrFields[] = {
+    {"ENABLE", 0, 1},  // the region takes part
+    {"SIZE", 1, 5},    // 2^(SIZE+1) bytes, SIZE ≥ 4 (32 B); the base aligned to it
+    {"SRD", 8, 8},     // subregion disables
+    {"B", 16, 1},     {"C", 17, 1},  {"S", 18, 1},
+    {"TEX", 19, 3},   {"AP", 24, 3},  // 000: no access, privileged or not
+    {"XN", 28, 1},                    // no instruction fetch
+};
+inline constexpr RegisterDef kRegisters[] = {
+    {"TYPE", 0x00, kTypeFields}, {"CTRL", 0x04, kCtrlFields}, {"RNR", 0x08, kRnrFields},
+    {"RBAR", 0x0C, kRbarFields}, {"RASR", 0x10, kRasrFields},
+};
+inline constexpr BlockDef kBlock{"MPU", 0xE000ED90u, kRegisters, BlockSource::kCortexM4};
+static_assert(WellFormed(kBlock));
+inline constexpr Address kBase = kBlock.base;
+inline constexpr std::uint32_t kType = OffsetOf(kBlock, "TYPE");
+inline constexpr std::uint32_t kCtrl = OffsetOf(kBlock, "CTRL");
+inline constexpr std::uint32_t kRnr = OffsetOf(kBlock, "RNR");
+inline constexpr std::uint32_t kRbar = OffsetOf(kBlock, "RBAR");
+inline constexpr std::uint32_t kRasr = OffsetOf(kBlock, "RASR");
+namespace type {
+inline constexpr Field kDregion = FieldOf(kBlock, "TYPE", "DREGION");
+}  // namespace type
+namespace ctrl {
+inline constexpr Field kEnable = FieldOf(kBlock, "CTRL", "ENABLE");
+inline constexpr Field kPrivdefena = FieldOf(kBlock, "CTRL", "PRIVDEFENA");
+}  // namespace ctrl
+namespace rnr {
+inline constexpr Field kRegion = FieldOf(kBlock, "RNR", "REGION");
+}  // namespace rnr
+namespace rasr {
+inline constexpr Field kEnable = FieldOf(kBlock, "RASR", "ENABLE");
+inline constexpr Field kSize = FieldOf(kBlock, "RASR", "SIZE");
+inline constexpr Field kAp = FieldOf(kBlock, "RASR", "AP");
+inline constexpr Field kXn = FieldOf(kBlock, "RASR", "XN");
+inline constexpr Field kC = FieldOf(kBlock, "RASR", "C");
+}  // namespace rasr
+
+}  // namespace mpu
+
 }  // namespace mjc::stm32g4

@@ -62,7 +62,9 @@ inline constexpr FieldDef kIeFields[] = {
 inline constexpr FieldDef kIlsFields[] = {
     // Interrupt groups to line 1 (1) or line 0 (0), RM0440 §44.4, FDCAN_ILS.
     {"RXFIFO0", 0, 1},  // RF0N, RF0F, RF0L
-    {"PERR", 6, 1},     // protocol errors: ARA, PED, PEA, WDI, BO, EW, EP
+    // Protocol errors: ARA, PED, PEA, WDI, BO, EW. EP (error passive) is not in this
+    // group but in BERR (bit 5) with ELO, as ST's HAL lists the groups.
+    {"PERR", 6, 1},
 };
 inline constexpr FieldDef kIleFields[] = {{"EINT0", 0, 1}, {"EINT1", 1, 1}};
 inline constexpr FieldDef kRxgfcFields[] = {
