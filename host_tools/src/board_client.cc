@@ -569,12 +569,13 @@ void BoardClient::Handle(const CanFrame& f) {
     case Function::kWindowStart: {
       protocol::WindowStart w;
       if (!ok(Decode(f, &w))) return;
-      if (bound_ && (w.config24 != (bound_config_ & 0xFFFFFFu) || !confirmed_)) {
+      if (bound_ && (w.config16 != (bound_config_ & 0xFFFFu) || !confirmed_)) {
         char text[160];
         std::snprintf(text, sizeof text,
-                      "node %d began a window of configuration ..%06x, not of this "
+                      "node %d began a window of configuration ..%04x, not of this "
                       "session's %s",
-                      node_, w.config24, NameConfig(bound_config_).c_str());
+                      node_, static_cast<unsigned>(w.config16),
+                      NameConfig(bound_config_).c_str());
         Mismatch(text);
       }
       if (on_window_start_ && MotionTrusted()) on_window_start_(w);

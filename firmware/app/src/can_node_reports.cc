@@ -62,7 +62,7 @@ void CanNode::AnnounceWindow(const JointApp::Snapshot& last) {
     w.motion =
         segment == Segment::kFlexionLoading ? Motion::kFlexion : Motion::kExtension;
     w.start_tick = last.telemetry.tick;
-    w.config24 = motion_config_ & 0xFFFFFFu;
+    w.config16 = static_cast<std::uint16_t>(motion_config_ & 0xFFFFu);
     Send(w);
   }
   last_segment_ = segment;

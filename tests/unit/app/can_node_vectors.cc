@@ -808,7 +808,7 @@ MJC_VECTOR_TEST(CanNode, AStartRunsOnlyTheConfigurationItNames) {
     CommandResult r;
     MotionConfig m;
     WindowStart w;
-    if (Decode(f, &w) == DecodeError::kOk) b.starts[b.starts_n++] = w;
+    if (Decode(f, &w) == DecodeError::kOk && b.starts_n < 16) b.starts[b.starts_n++] = w;
     if (Decode(f, &r) == DecodeError::kOk) {
       answered = r.outcome == CommandOutcomeCode::kAccepted && r.sequence == 3 &&
                  r.session == 0x5151 && r.owner == 0x5151;
@@ -841,7 +841,7 @@ MJC_VECTOR_TEST(CanNode, AStartRunsOnlyTheConfigurationItNames) {
   // Our two repetitions (four windows) at our amplitude, each window named ours.
   VT_EXPECT_EQ(b.starts_n - starts_before, 4);
   for (int i = starts_before; i < b.starts_n; ++i) {
-    VT_EXPECT_EQ(b.starts[i].config24, digest & 0xFFFFFFu);
+    VT_EXPECT_EQ(b.starts[i].config16, digest & 0xFFFFu);
   }
   VT_EXPECT_TRUE(widest > 0.09 && widest < 0.11);
 }

@@ -220,12 +220,12 @@ struct SweepConfig {
 // --sync-line). start_tick is the WindowTicks.start_tick of the summary that follows
 // at the window's end (the tracker's start, aligned by the velocity estimator's delay,
 // lands on the same tick), unless the main loop missed ticks.
-// config24: the low 24 bits of the ConfigDigest of the motion the window belongs to
+// config16: the low 16 bits of the ConfigDigest of the motion the window belongs to
 // (MotionConfig names it whole), so a window is never taken for another motion's.
 struct WindowStart {
   Motion motion = Motion::kFlexion;
   std::uint32_t start_tick = 0;
-  std::uint32_t config24 = 0;
+  std::uint16_t config16 = 0;
 };
 // A motion started: the board's first frame of it, right after the accepted start's
 // CommandResult. Which start (kStartTrial, kStartSweep, kStartStream), the session that
@@ -510,9 +510,9 @@ MJC_MESSAGE(SweepConfig, kSweepConfig, 8, kHost,
             MakeSignal("frequency_mHz", &T::frequency_mHz, 32, 16, "mHz"),
             MakeSignal("repetitions", &T::repetitions, 48, 8),
             MakeSignal("rest_100ms", &T::rest_100ms, 56, 8, "100 ms"));
-MJC_MESSAGE(WindowStart, kWindowStart, 8, kBoard, MakeSignal("motion", &T::motion, 0, 8),
+MJC_MESSAGE(WindowStart, kWindowStart, 7, kBoard, MakeSignal("motion", &T::motion, 0, 8),
             MakeSignal("start_tick", &T::start_tick, 8, 32, "tick"),
-            MakeSignal("config24", &T::config24, 40, 24));
+            MakeSignal("config16", &T::config16, 40, 16));
 MJC_MESSAGE(MotionConfig, kMotionConfig, 7, kBoard, MakeSignal("start", &T::start, 0, 8),
             MakeSignal("session", &T::session, 8, 16),
             MakeSignal("config", &T::config, 24, 32));
