@@ -174,13 +174,17 @@ void AddCalibrate(CLI::App& app) {
       sweep.frequency_mHz = static_cast<std::uint16_t>(std::lround(frequency_hz * 1000));
       sweep.repetitions = static_cast<std::uint8_t>(cycles);
       sweep.rest_100ms = 5;
-      if (!board.Send(sweep, &why)) throw Failure(why);
-      const auto outcome =
-          board.Command(CommandCode::kStartSweep, host::kStartAnswerMs, &why);
+      // The sweep and the start naming it; the board's MotionConfig confirms it.
+      const auto outcome = board.Start(sweep, host::kStartAnswerMs, &why);
+      if (!outcome && board.motion_mismatch()) {
+        const std::string mismatch = board.mismatch();
+        throw Failure(Exit::kRefused,
+                      mismatch + "; " + StopMotion(board) + "; nothing recorded");
+      }
       if (!outcome) throw Failure(NoAnswer(board), why);
       if (*outcome != CommandOutcomeCode::kAccepted) {
-        throw Failure(Exit::kRefused, who + " refused the sweep: " +
-                                          std::string(host::OutcomeName(*outcome)));
+        throw Failure(Exit::kRefused,
+                      "the sweep was refused: " + board.RefusalMessage(*outcome));
       }
 
       // Record the board's angles until it is idle again.
@@ -219,11 +223,18 @@ void AddCalibrate(CLI::App& app) {
       // The stop first (the motor must not wait for a file), then the samples, kept
       // however the sweep ended. Two boards answering for the node may both be moving:
       // both are told.
-      const std::string stopped = !samples.ended && !stopped_by_estop() &&
-                                          (samples.end == host::WaitEnd::kInterrupted ||
-                                           samples.end == host::WaitEnd::kAmbiguous)
-                                      ? StopMotion(board)
-                                      : "";
+      const bool wrong = !samples.ended && samples.end == host::WaitEnd::kWrongMotion;
+      const std::string stopped =
+          !samples.ended && !stopped_by_estop() &&
+                  (samples.end == host::WaitEnd::kInterrupted ||
+                   samples.end == host::WaitEnd::kAmbiguous || wrong)
+              ? StopMotion(board)
+              : "";
+      board.ReleaseMotion();  // the sweep is over
+      // Never a record of a motion that is not the one this session started.
+      if (wrong) {
+        throw Failure(Exit::kRefused, why + "; " + stopped + "; nothing recorded");
+      }
       const std::filesystem::path sweep_path = dir / "sweep.csv";
       WriteSweep(sweep_path, *rate_hz, motor, joint);
       const std::string kept = "; " + std::to_string(motor.size()) +
@@ -243,6 +254,8 @@ void AddCalibrate(CLI::App& app) {
                           "interrupted: " + stopped + kept + " (not fitted)");
           case host::WaitEnd::kAmbiguous:
             throw Failure(Exit::kAmbiguous, why + " (" + stopped + ")" + kept);
+          case host::WaitEnd::kWrongMotion:  // thrown above
+            throw Failure(Exit::kRefused, why);
           case host::WaitEnd::kSilent:
             throw Failure(Exit::kNoAnswer, "during the sweep, " + why + kept);
           case host::WaitEnd::kBoardTime:

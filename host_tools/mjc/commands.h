@@ -271,6 +271,7 @@ inline const std::atomic<bool>& StopOnSignals() {
 // client's waits: "node N stopped", or why it could not be confirmed.
 inline std::string StopMotion(host::BoardClient& board) {
   board.SetInterrupt(nullptr);
+  board.ReleaseMotion();  // whatever runs is stopped, ours or not
   std::string why;
   const auto outcome = board.Command(protocol::CommandCode::kStop, 1000, &why);
   const std::string who = "node " + std::to_string(board.node());
@@ -299,6 +300,7 @@ inline void IdentifyOrThrow(host::BoardClient& board, std::chrono::milliseconds 
       throw Failure(Exit::kStopped, "interrupted before anything was done");
     case host::WaitEnd::kSilent:
     case host::WaitEnd::kBoardTime:
+    case host::WaitEnd::kWrongMotion:  // nothing was started: not while identifying
       break;
   }
   throw Failure(Exit::kNoAnswer, why);

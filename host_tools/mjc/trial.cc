@@ -42,6 +42,8 @@ Exit ExitOf(host::TrialEnd end) {
       return Exit::kStopped;
     case host::TrialEnd::kAmbiguous:
       return Exit::kAmbiguous;
+    case host::TrialEnd::kWrongConfig:
+      return Exit::kRefused;
   }
   return Exit::kFailure;
 }
@@ -236,7 +238,8 @@ void AddTrial(CLI::App& app) {
           // every board already.
           const bool stop =
               !stopped_by_estop() && (trial.end == host::TrialEnd::kInterrupted ||
-                                      trial.end == host::TrialEnd::kAmbiguous);
+                                      trial.end == host::TrialEnd::kAmbiguous ||
+                                      trial.end == host::TrialEnd::kWrongConfig);
           const std::string stopped = stop ? StopMotion(board) : "";
           // What arrived is kept, the interrupted trial's windows included.
           if (!trial.windows.empty()) {

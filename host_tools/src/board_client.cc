@@ -130,6 +130,7 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
       static_cast<std::uint64_t>(patience.board.count()) * protocol::kBoardTickHz / 1000u;
   for (;;) {
     if (ambiguous()) return end_with(WaitEnd::kAmbiguous, AmbiguityMessage());
+    if (motion_mismatch()) return end_with(WaitEnd::kWrongMotion, mismatch_);
     if (done()) return true;
     if (interrupted()) return end_with(WaitEnd::kInterrupted, "interrupted");
     if (!Poll(20, why)) {
@@ -137,6 +138,7 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
       return false;
     }
     if (ambiguous()) return end_with(WaitEnd::kAmbiguous, AmbiguityMessage());
+    if (motion_mismatch()) return end_with(WaitEnd::kWrongMotion, mismatch_);
     if (done()) return true;
     const auto now = now_();
     if (frames_ != frames_seen) {
@@ -154,16 +156,13 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
       }
     }
     if (now - heard_at > patience.silence) {
-      return end_with(WaitEnd::kSilent, SilentNode(node_, link_->Name()));
+      return end_with(WaitEnd::kSilent, SilenceMessage());
     }
     // Talking without a heartbeat: its clock cannot be read, so the board time bound
     // could never end the wait. Far longer than any heartbeat gap of a board that sends
     // them, however slowly it is simulated.
     if (now - beat_at > std::max(patience.silence, kHeartbeatSilence)) {
-      return end_with(WaitEnd::kSilent, "node " + std::to_string(node_) +
-                                            " sent no heartbeat for " +
-                                            std::to_string(kHeartbeatSilence.count()) +
-                                            " ms (is its HeartbeatHz 0?)");
+      return end_with(WaitEnd::kSilent, NoHeartbeatMessage());
     }
   }
 }
@@ -191,22 +190,169 @@ bool BoardClient::Identify(WaitEnd* end, std::string* why,
 }
 
 std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int timeout_ms,
-                                                       std::string* why) {
+                                                       std::string* why,
+                                                       protocol::ConfigDigest config) {
   const std::uint8_t seq = ++sequence_;
   last_result_.reset();
-  if (!Send(protocol::Command{code, seq, session_}, why)) return std::nullopt;
+  answer_.reset();
+  if (!Send(protocol::Command{code, seq, session_, config}, why)) return std::nullopt;
+  // Another tool's answer (its session, or its sequence) is not this one's.
   const auto answered = [&] {
-    return last_result_ && last_result_->sequence == seq && last_result_->code == code;
+    return last_result_ && last_result_->sequence == seq && last_result_->code == code &&
+           last_result_->session == session_;
   };
   const std::chrono::milliseconds timeout{timeout_ms};
   WaitEnd end{};
-  if (Await(answered, {timeout, timeout}, &end, why)) return last_result_->outcome;
+  if (Await(answered, {timeout, timeout}, &end, why)) {
+    answer_ = last_result_;
+    return last_result_->outcome;
+  }
   if (end == WaitEnd::kBoardTime) {
     *why = "node " + std::to_string(node_) +
            " talks but did not answer the command within " + std::to_string(timeout_ms) +
            " ms of its own time";
   }
   return std::nullopt;
+}
+
+std::string BoardClient::SilenceMessage() const {
+  std::string out = SilentNode(node_, link_->Name());
+  if (frames_ == 0) return out;
+  // It was heard: what it last said tells a board killed or powered off mid-motion
+  // from one that never answered.
+  out += "; it went quiet after " + std::to_string(frames_) + " frames";
+  if (heartbeats_heard_ > 0) {
+    out += ", its last heartbeat saying " + std::string(StateName(status_.state));
+    if (status_.state == BoardState::kRunning ||
+        status_.state == BoardState::kCalibrating) {
+      out += " (stopped, reset or powered off mid-motion?)";
+    }
+  }
+  return out;
+}
+
+std::string BoardClient::NoHeartbeatMessage() const {
+  const std::string who = "node " + std::to_string(node_);
+  // A bootloader answers with BootStatus, never a heartbeat.
+  if (boot_status_) {
+    return who + " is in its bootloader, " + DescribeBootStatus(*boot_status_) +
+           ", not its application (mjc flash --node " + std::to_string(node_) +
+           " updates or boots it)";
+  }
+  return who + " sends frames but no heartbeat for " +
+         std::to_string(kHeartbeatSilence.count()) +
+         " ms: its heartbeats are off (HeartbeatHz 0?)";
+}
+
+std::string BoardClient::RefusalMessage(CommandOutcomeCode outcome) const {
+  const std::string who = "node " + std::to_string(node_);
+  const auto hex = [](unsigned v, int digits) {
+    char text[12];
+    std::snprintf(text, sizeof text, "%0*x", digits, v);
+    return std::string(text);
+  };
+  if (answer_ && answer_->outcome == outcome) {
+    const protocol::CommandResult& r = *answer_;
+    const bool held = outcome == CommandOutcomeCode::kRefusedNotIdle ||
+                      outcome == CommandOutcomeCode::kRefusedBusy;
+    if (held && r.detail != 0 && r.owner != 0 && r.owner != session_) {
+      return who + " is in use by session " + hex(r.owner, 4) + ", started by its " +
+             std::string(MotionName(r.detail)) +
+             " (another tool's: wait for it to end, or stop it with mjc stop --node " +
+             std::to_string(node_) + ")";
+    }
+    if (held && r.detail != 0 && r.owner == 0) {
+      return who + " is in use: a " + std::string(MotionName(r.detail)) +
+             " runs, started by a tool without a session (cansend?); stop it with mjc "
+             "stop --node " +
+             std::to_string(node_);
+    }
+    if (outcome == CommandOutcomeCode::kRefusedInvalid &&
+        r.detail == protocol::kDetailConfigMismatch) {
+      return who + " holds another configuration than this session's " +
+             hex(bound_config_, 8) + " (" + bound_name_ +
+             "): another sender's came in between" +
+             (configs_seen_.empty()
+                  ? std::string()
+                  : " (last seen: " + configs_seen_.back().second + ")");
+    }
+  }
+  return who + " refused: " + std::string(OutcomeName(outcome));
+}
+
+template <class Config>
+std::optional<CommandOutcomeCode> BoardClient::StartBound(CommandCode code,
+                                                          const Config& config,
+                                                          int timeout_ms,
+                                                          std::string* why) {
+  const protocol::ConfigDigest digest = protocol::ConfigDigestOf(config);
+  std::optional<CommandOutcomeCode> outcome;
+  // A configuration frame of another sender's between ours and the start makes the
+  // board refuse it (kDetailConfigMismatch): the pair is sent again, twice at most.
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    bound_ = true;
+    confirmed_ = false;
+    bound_code_ = code;
+    bound_config_ = digest;
+    bound_name_ = DescribeConfig(config);
+    mismatch_.clear();
+    if (!Send(config, why)) return std::nullopt;
+    outcome = Command(code, timeout_ms, why, digest);
+    if (!outcome) return std::nullopt;  // unanswered, or answered with another motion
+    const bool crossed = *outcome == CommandOutcomeCode::kRefusedInvalid && answer_ &&
+                         answer_->detail == protocol::kDetailConfigMismatch;
+    if (!crossed) break;
+  }
+  if (*outcome != CommandOutcomeCode::kAccepted) {
+    bound_ = false;
+    mismatch_.clear();
+    return outcome;
+  }
+  // The board's first frame of the motion follows its answer at once.
+  const std::chrono::milliseconds second{1000};
+  WaitEnd end{};
+  if (!Await([&] { return confirmed_; }, {second, second}, &end, why)) {
+    if (end == WaitEnd::kBoardTime) {
+      Mismatch("node " + std::to_string(node_) +
+               " accepted the start but did not say what it runs (no MotionConfig "
+               "within 1 s of its time: an older image?); not recording it");
+      *why = mismatch_;
+    }
+    return std::nullopt;
+  }
+  return outcome;
+}
+
+std::optional<CommandOutcomeCode> BoardClient::Start(const protocol::TrialConfig& config,
+                                                     int timeout_ms, std::string* why) {
+  return StartBound(CommandCode::kStartTrial, config, timeout_ms, why);
+}
+
+std::optional<CommandOutcomeCode> BoardClient::Start(const protocol::SweepConfig& config,
+                                                     int timeout_ms, std::string* why) {
+  return StartBound(CommandCode::kStartSweep, config, timeout_ms, why);
+}
+
+void BoardClient::ReleaseMotion() {
+  bound_ = false;
+  confirmed_ = false;
+  mismatch_.clear();
+}
+
+void BoardClient::Mismatch(const std::string& what) {
+  if (mismatch_.empty()) mismatch_ = what;
+}
+
+std::string BoardClient::NameConfig(protocol::ConfigDigest digest) const {
+  char hex[12];
+  std::snprintf(hex, sizeof hex, "%08x", digest);
+  if (digest == bound_config_) return std::string(hex) + " (" + bound_name_ + ")";
+  for (auto it = configs_seen_.rbegin(); it != configs_seen_.rend(); ++it) {
+    if (it->first == digest) {
+      return std::string(hex) + " (" + it->second + ", another sender's)";
+    }
+  }
+  return std::string(hex) + " (not seen on the bus)";
 }
 
 template <class Request>
@@ -363,6 +509,7 @@ void BoardClient::Handle(const CanFrame& f) {
     case Function::kHeartbeat: {
       protocol::Heartbeat h;
       if (!ok(Decode(f, &h))) return;
+      boot_status_.reset();  // the application runs
       identity_.OnHeartbeat(h.tick);
       ++heartbeats_heard_;
       status_.heard = true;
@@ -385,7 +532,9 @@ void BoardClient::Handle(const CanFrame& f) {
       if (ok(Decode(f, &a))) {
         status_.motor_rad = a.motor.ToDouble();
         status_.joint_rad = a.joint.ToDouble();
-        if (keep_angles_) angles_.push_back({status_.motor_rad, status_.joint_rad});
+        if (keep_angles_ && MotionTrusted()) {
+          angles_.push_back({status_.motor_rad, status_.joint_rad});
+        }
       }
       return;
     }
@@ -396,7 +545,9 @@ void BoardClient::Handle(const CanFrame& f) {
       for (std::size_t i = 0; i < b.motor.size(); ++i) {
         status_.motor_rad = b.motor[i].ToDouble();
         status_.joint_rad = b.joint[i].ToDouble();
-        if (keep_angles_) angles_.push_back({status_.motor_rad, status_.joint_rad});
+        if (keep_angles_ && MotionTrusted()) {
+          angles_.push_back({status_.motor_rad, status_.joint_rad});
+        }
       }
       return;
     }
@@ -417,7 +568,61 @@ void BoardClient::Handle(const CanFrame& f) {
     }
     case Function::kWindowStart: {
       protocol::WindowStart w;
-      if (ok(Decode(f, &w)) && on_window_start_) on_window_start_(w);
+      if (!ok(Decode(f, &w))) return;
+      if (bound_ && (w.config16 != (bound_config_ & 0xFFFFu) || !confirmed_)) {
+        char text[160];
+        std::snprintf(text, sizeof text,
+                      "node %d began a window of configuration ..%04x, not of this "
+                      "session's %s",
+                      node_, static_cast<unsigned>(w.config16),
+                      NameConfig(bound_config_).c_str());
+        Mismatch(text);
+      }
+      if (on_window_start_ && MotionTrusted()) on_window_start_(w);
+      return;
+    }
+    case Function::kBootStatus: {
+      protocol::BootStatus b;
+      if (ok(Decode(f, &b))) boot_status_ = b;
+      return;
+    }
+    case Function::kMotionConfig: {
+      protocol::MotionConfig m;
+      if (!ok(Decode(f, &m)) || !bound_) return;
+      // The bound start's motion: this session's, with this configuration, once.
+      if (!confirmed_ && m.start == bound_code_ && m.session == session_ &&
+          m.config == bound_config_) {
+        confirmed_ = true;
+        return;
+      }
+      char session[8];
+      std::snprintf(session, sizeof session, "%04x", m.session);
+      Mismatch("node " + std::to_string(node_) + " runs a " +
+               std::string(MotionName(static_cast<std::uint8_t>(m.start))) +
+               " of session " + session + " with configuration " + NameConfig(m.config) +
+               ", not this session's " +
+               std::string(MotionName(static_cast<std::uint8_t>(bound_code_))) +
+               " with configuration " + NameConfig(bound_config_));
+      return;
+    }
+    case Function::kTrialConfig:
+    case Function::kSweepConfig: {
+      // Another sender's configuration for this node: kept to name what the board runs.
+      std::string name;
+      protocol::ConfigDigest digest = 0;
+      if (FunctionOf(f.id) == static_cast<std::uint8_t>(Function::kTrialConfig)) {
+        protocol::TrialConfig c;
+        if (Decode(f, &c) != DecodeError::kOk) return;
+        digest = protocol::ConfigDigestOf(c);
+        name = DescribeConfig(c);
+      } else {
+        protocol::SweepConfig c;
+        if (Decode(f, &c) != DecodeError::kOk) return;
+        digest = protocol::ConfigDigestOf(c);
+        name = DescribeConfig(c);
+      }
+      if (configs_seen_.size() >= 8) configs_seen_.erase(configs_seen_.begin());
+      configs_seen_.emplace_back(digest, std::move(name));
       return;
     }
     // A window travels as seven frames (see AcceptWindowPart).
@@ -473,6 +678,15 @@ void BoardClient::Handle(const CanFrame& f) {
       if (!ok(Decode(f, &r)) || !AcceptWindowPart(kLastWindowPart)) return;
       partial_.offset_Nm = r.offset.ToDouble();
       partial_.residual_rms_Nm = r.residual_rms.ToDouble();
+      // Never a window of a motion this client cannot vouch for.
+      if (!MotionTrusted()) {
+        ++unbound_windows_;
+        if (bound_ && !confirmed_) {
+          Mismatch("node " + std::to_string(node_) +
+                   " sent a window before it said what it runs");
+        }
+        return;
+      }
       windows_.push_back(partial_);
       return;
     }

@@ -366,20 +366,29 @@ SweepRun RunSweep(BoardClient& board, const protocol::SweepConfig& sweep,
     out.error = "no angle telemetry to fit: " + why;
     return out;
   }
-  if (!board.Send(sweep, &why)) {
-    out.error = why;
-    return out;
-  }
-  const auto started =
-      board.Command(protocol::CommandCode::kStartSweep, kStartAnswerMs, &why);
+  // The sweep and the start naming it; the board's MotionConfig confirms it.
+  const auto started = board.Start(sweep, kStartAnswerMs, &why);
   if (started != protocol::CommandOutcomeCode::kAccepted) {
-    out.error = "the board refused the calibration sweep" +
-                (started ? ": " + std::string(OutcomeName(*started)) : ": " + why);
+    out.error = board.motion_mismatch() ? board.mismatch()
+                : started               ? "the board refused the calibration sweep: " +
+                                board.RefusalMessage(*started)
+                          : "the board refused the calibration sweep: " + why;
+    // Whatever runs that is not this sweep is stopped, and nothing of it recorded.
+    const bool wrong = board.motion_mismatch();
+    board.ReleaseMotion();
+    if (wrong) (void)board.Command(protocol::CommandCode::kStop, 1000, &why);
     return out;
   }
   const double length_s =
       sweep.repetitions / (sweep.frequency_mHz / 1000.0) + 2 * sweep.rest_100ms / 10.0;
   out.samples = RecordSweep(board, length_s, {}, &why);
+  board.ReleaseMotion();
+  if (!out.samples.ended && out.samples.end == WaitEnd::kWrongMotion) {
+    out.error = "the sweep did not run as sent, stopped: " + why;
+    out.samples = {};
+    (void)board.Command(protocol::CommandCode::kStop, 1000, &why);
+    return out;
+  }
   if (!out.samples.ended) {
     out.error = "the sweep did not end: " + why;
     return out;

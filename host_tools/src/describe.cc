@@ -68,6 +68,42 @@ std::string_view OutcomeName(protocol::CommandOutcomeCode outcome) {
   return "unknown outcome";
 }
 
+namespace {
+// The common part: "6.0° × 3 at 0.50 Hz, rest 1.5 s".
+std::string Oscillation(Angle amplitude, std::uint16_t frequency_mHz,
+                        std::uint8_t repetitions, std::uint8_t rest_100ms) {
+  char text[96];
+  std::snprintf(text, sizeof text, "%.1f° × %u at %.2f Hz, rest %.1f s",
+                amplitude.ToDouble() * 180.0 / 3.14159265358979323846,
+                static_cast<unsigned>(repetitions), frequency_mHz / 1000.0,
+                rest_100ms / 10.0);
+  return text;
+}
+}  // namespace
+
+std::string DescribeConfig(const protocol::TrialConfig& config) {
+  return Oscillation(config.amplitude, config.frequency_mHz, config.repetitions,
+                     config.rest_100ms);
+}
+
+std::string DescribeConfig(const protocol::SweepConfig& config) {
+  return "sweep to " + Oscillation(config.end_amplitude, config.frequency_mHz,
+                                   config.repetitions, config.rest_100ms);
+}
+
+std::string_view MotionName(std::uint8_t start_code) {
+  switch (static_cast<protocol::CommandCode>(start_code)) {
+    case protocol::CommandCode::kStartTrial:
+      return "trial";
+    case protocol::CommandCode::kStartSweep:
+      return "calibration sweep";
+    case protocol::CommandCode::kStartStream:
+      return "stream";
+    default:
+      return "motion";
+  }
+}
+
 std::string_view ParamStatusName(protocol::ParamStatus status) {
   using protocol::ParamStatus;
   switch (status) {

@@ -20,17 +20,25 @@ std::chrono::milliseconds TrialBoardTime(const TrialConfig& config) {
 BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
                          const std::function<void(const BoardWindow&)>& progress) {
   BoardTrial out;
+  // The motion's binding ends with the trial, however it ends.
+  struct Release {
+    BoardClient& board;
+    ~Release() { board.ReleaseMotion(); }
+  } release{board};
   const auto fail = [&out](TrialEnd end, std::string why) {
     out.end = end;
     out.error = std::move(why);
+    // Nothing of a motion that was not the one started is kept.
+    if (end == TrialEnd::kWrongConfig) out.windows.clear();
     return out;
   };
   std::string why;
   board.TakeWindows();
   const std::uint64_t broken_before = board.incomplete_windows();
-  if (!board.Send(config, &why)) return fail(TrialEnd::kLinkFailed, why);
-  const auto outcome = board.Command(CommandCode::kStartTrial, kStartAnswerMs, &why);
+  // The configuration and the start naming it; the board's MotionConfig confirms it.
+  const auto outcome = board.Start(config, kStartAnswerMs, &why);
   if (!outcome) {
+    if (board.motion_mismatch()) return fail(TrialEnd::kWrongConfig, board.mismatch());
     if (board.interrupted()) return fail(TrialEnd::kInterrupted, why);
     if (board.ambiguous()) return fail(TrialEnd::kAmbiguous, why);
     return fail(board.link_failed() ? TrialEnd::kLinkFailed : TrialEnd::kNoAnswer, why);
@@ -49,7 +57,7 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
                                           " once its cause is gone");
     }
     return fail(TrialEnd::kRefused,
-                "the board refused the trial: " + std::string(OutcomeName(*outcome)));
+                "the board refused the trial: " + board.RefusalMessage(*outcome));
   }
   // Followed at the board's pace: done when the board says it is idle again after
   // running. Its frames arrive in the order it sent them, and it sends a window's
@@ -71,6 +79,8 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
         return fail(TrialEnd::kInterrupted, why);
       case WaitEnd::kAmbiguous:
         return fail(TrialEnd::kAmbiguous, why);
+      case WaitEnd::kWrongMotion:
+        return fail(TrialEnd::kWrongConfig, why);
       case WaitEnd::kSilent:
         return fail(TrialEnd::kNoAnswer, "during the trial, " + why);
       case WaitEnd::kBoardTime:

@@ -80,15 +80,16 @@ check "fitted offsets within 0.05° of the plant's" \
 check "the calibration keeps the stiffness node 1 held" \
   awk -v k="${stiffness:-}" 'BEGIN { exit !(k != "" && (k - 0.65)^2 < 1e-12) }'
 check "mjc cal show reads the saved calibration" "$mjc" cal show "$work/cal/calibration.json"
-# cansend a stop command (node 1, sequence 0x2A, no session): the board answers on 0x041.
+# cansend a stop command (node 1, sequence 0x2A, no session, no configuration: 8
+# bytes): the board answers on 0x041, naming the sequence and session it answers.
 count_receivers
 base=$receivers
 candump -n 1 vcan0,041:7FF >"$work/answer.txt" 2>&1 &
 dumper=$!
 wait_receivers $((base + 1))
-cansend vcan0 021#012A0000
+cansend vcan0 021#012A000000000000
 wait "$dumper"
-check "cansend command gets the board's CommandResult in candump" grep -q '041.*01 00 00 2A' "$work/answer.txt"
+check "cansend command gets the board's CommandResult in candump" grep -q '041.*01 00 00 2A 00 00 00 00' "$work/answer.txt"
 kill "$sim"
 wait "$sim"
 check "board 1 accounted for every frame (no malformed)" grep -q 'malformed 0' "$work/sim.err"

@@ -309,6 +309,7 @@ class Rig {
   // Starts the trial (or the stream) and returns its first tick; 0 on failure.
   std::uint32_t StartMotion() {
     const bool stream = case_ == FaultCase::kCommandTimeout;
+    protocol::ConfigDigest digest = 0;  // the start names the trial's configuration
     if (!stream) {
       protocol::TrialConfig trial;
       trial.amplitude = Angle::Quantize(kAmplitudeRad);
@@ -316,10 +317,11 @@ class Rig {
       trial.repetitions = 5;
       trial.rest_100ms = kRest100ms;
       Send(trial);
+      digest = protocol::ConfigDigestOf(trial);
     }
     const CommandCode code =
         stream ? CommandCode::kStartStream : CommandCode::kStartTrial;
-    const std::uint8_t seq = SendCommand(code);
+    const std::uint8_t seq = SendCommand(code, digest);
     const std::uint32_t first = next_tick_;
     const auto outcome = AwaitResult(code, seq);
     if (!outcome || *outcome != CommandOutcomeCode::kAccepted) {
@@ -376,8 +378,8 @@ class Rig {
     board_.Poll();
   }
 
-  std::uint8_t SendCommand(CommandCode code) {
-    Send(protocol::Command{code, ++sequence_, kSession});
+  std::uint8_t SendCommand(CommandCode code, protocol::ConfigDigest config = 0) {
+    Send(protocol::Command{code, ++sequence_, kSession, config});
     return sequence_;
   }
 

@@ -180,7 +180,8 @@ void CanNode::HandleFrame(const CanFrame& frame) {
 void CanNode::HandleCommand(const protocol::Command& c) {
   const RequestTag tag =
       Tag(Origin::kCommand,
-          (std::uint32_t{static_cast<std::uint8_t>(c.code)} << 8) | c.sequence);
+          (std::uint32_t{static_cast<std::uint8_t>(c.code)} << 8) | c.sequence) |
+      (RequestTag{c.session} << 32);
   const std::uint32_t hz = tick_hz();
   const bool start = IsStart(c.code);
   // One start at a time in the mailbox, so that the session its verdict binds the
@@ -189,6 +190,7 @@ void CanNode::HandleCommand(const protocol::Command& c) {
     return Answer(tag, {CommandOutcomeCode::kRefusedBusy, 0});
   }
   CommandOutcome o;
+  protocol::ConfigDigest config = 0;  // of the motion a start would run (0: a stream)
   switch (c.code) {
     case CommandCode::kStop:
       o = app_->Stop(tag);
@@ -196,12 +198,24 @@ void CanNode::HandleCommand(const protocol::Command& c) {
     case CommandCode::kClearFaults:
       o = app_->ClearFaults(tag);
       break;
+    // Only with the configuration the command names: a configuration frame from
+    // another sender since (or a changed one) is not what this session asked for.
     case CommandCode::kStartTrial:
+      config = protocol::ConfigDigestOf(trial_);
+      if (have_trial_ && c.config != config) {
+        o = {CommandOutcomeCode::kRefusedInvalid, protocol::kDetailConfigMismatch};
+        break;
+      }
       o = StartOscillation<SineConfig>(have_trial_, trial_, hz, [&](const SineConfig& s) {
         return app_->StartTrial(s, tag);
       });
       break;
     case CommandCode::kStartSweep:
+      config = protocol::ConfigDigestOf(sweep_);
+      if (have_sweep_ && c.config != config) {
+        o = {CommandOutcomeCode::kRefusedInvalid, protocol::kDetailConfigMismatch};
+        break;
+      }
       o = StartOscillation<RampedSineConfig>(
           have_sweep_, sweep_, hz,
           [&](const RampedSineConfig& s) { return app_->StartCalibrationSweep(s, tag); });
@@ -215,6 +229,8 @@ void CanNode::HandleCommand(const protocol::Command& c) {
   if (start) {
     start_pending_ = true;
     start_session_ = c.session;
+    start_code_ = c.code;
+    start_config_ = config;
   }
 }
 
@@ -226,6 +242,14 @@ void CanNode::Answer(RequestTag tag, const CommandOutcome& outcome) {
       r.outcome = outcome.result;
       r.detail = outcome.detail;
       r.sequence = static_cast<std::uint8_t>(tag & 0xFFu);
+      r.session = SessionOf(tag);
+      // Who holds the board: the start awaiting its verdict, or the motion running.
+      r.owner = start_pending_ ? start_session_ : motion_session_;
+      const bool held = outcome.result == CommandOutcomeCode::kRefusedNotIdle ||
+                        outcome.result == CommandOutcomeCode::kRefusedBusy;
+      if (IsStart(r.code) && held) {
+        r.detail = start_pending_ ? static_cast<std::uint8_t>(start_code_) : motion_code_;
+      }
       return Send(r);
     }
     case Origin::kParam:
@@ -243,6 +267,7 @@ void CanNode::Answer(RequestTag tag, const CommandOutcome& outcome) {
 }
 
 void CanNode::OnVerdict(const AppEvent& e) {
+  bool started = false;
   switch (OriginOf(e.tag)) {
     case Origin::kCommand: {
       const auto code = static_cast<CommandCode>((e.tag >> 8) & 0xFFu);
@@ -251,8 +276,11 @@ void CanNode::OnVerdict(const AppEvent& e) {
       if (e.outcome.result == CommandOutcomeCode::kAccepted) {
         // The motion is its commander's: supervised by its heartbeats from now on.
         motion_session_ = start_session_;
+        motion_code_ = static_cast<std::uint8_t>(code);
+        motion_config_ = start_config_;
         last_host_tick_ = e.tick;
         if (code == CommandCode::kStartStream) last_setpoint_tick_ = e.tick;
+        started = true;
       }
       break;
     }
@@ -262,6 +290,11 @@ void CanNode::OnVerdict(const AppEvent& e) {
       break;
   }
   Answer(e.tag, e.outcome);
+  // The motion's first frame: what it runs, under the name its session gave it.
+  if (started) {
+    Send(protocol::MotionConfig{static_cast<CommandCode>(motion_code_), motion_session_,
+                                motion_config_});
+  }
 }
 
 void CanNode::HandleBootHold(const protocol::BootHold& hold) {

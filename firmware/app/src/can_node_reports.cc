@@ -20,8 +20,10 @@ void CanNode::SendEvent(const AppEvent& e) {
       return OnVerdict(e);
     case AppEvent::Kind::kStateChanged:
       // A motion that ended is nobody's any more.
-      if (e.state == BoardState::kIdle || e.state == BoardState::kFault)
+      if (e.state == BoardState::kIdle || e.state == BoardState::kFault) {
         motion_session_ = 0;
+        motion_code_ = 0;
+      }
       heartbeat_.Now(clock_.ticks());  // tell the host at once
       return;
     case AppEvent::Kind::kWindow: {
@@ -60,6 +62,7 @@ void CanNode::AnnounceWindow(const JointApp::Snapshot& last) {
     w.motion =
         segment == Segment::kFlexionLoading ? Motion::kFlexion : Motion::kExtension;
     w.start_tick = last.telemetry.tick;
+    w.config16 = static_cast<std::uint16_t>(motion_config_ & 0xFFFFu);
     Send(w);
   }
   last_segment_ = segment;

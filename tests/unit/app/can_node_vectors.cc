@@ -2,6 +2,7 @@
 // telemetry at their rates, window summaries and faults out; malformed frames counted
 // and dropped; the streamed-setpoint timeout stopping the motor. Every frame the node
 // sends is decoded with the protocol codec.
+#include <algorithm>
 #include <cstdint>
 
 #include "mjc/app/can_node.h"
@@ -98,7 +99,8 @@ void Calibrate(Board& b) {
 void StartTrial(Board& b, const TrialConfig& config, std::uint8_t sequence, int ticks = 1,
                 SessionId session = 0) {
   b.node.HandleFrame(Encode(config, 1));
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, sequence, session}, 1));
+  b.node.HandleFrame(Encode(
+      Command{CommandCode::kStartTrial, sequence, session, ConfigDigestOf(config)}, 1));
   b.Run(ticks);
 }
 
@@ -250,7 +252,8 @@ MJC_VECTOR_TEST(CanNode, EachCommandIsAnsweredWithItsOwnVerdict) {
   t.amplitude = Angle::FromDouble(0.2);
   b.node.HandleFrame(Encode(t, 1));
   // Three commands before one tick: each reply carries its own sequence and verdict.
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 10}, 1));  // uncalibrated
+  b.node.HandleFrame(
+      Encode(Command{CommandCode::kStartTrial, 10, 0, ConfigDigestOf(t)}, 1));  // uncal.
   b.node.HandleFrame(Encode(Command{CommandCode::kStop, 11}, 1));
   b.node.HandleFrame(Encode(Command{CommandCode::kClearFaults, 12}, 1));
   b.Run(3);
@@ -386,12 +389,17 @@ MJC_VECTOR_TEST(CanNode, OneStartAtATimeAwaitsItsVerdict) {
   Calibrate(b);
   b.node.HandleFrame(Encode(LongTrial(), 1));
   // Two starts before the tick took the first: the second is refused as busy at once.
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 1, 0x1111}, 1));
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 2, 0x2222}, 1));
+  const ConfigDigest digest = ConfigDigestOf(LongTrial());
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 1, 0x1111, digest}, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 2, 0x2222, digest}, 1));
   b.Drain();
   VT_EXPECT_EQ(b.results_n, 1);
   VT_EXPECT_TRUE(b.results[0].sequence == 2 &&
                  b.results[0].outcome == CommandOutcomeCode::kRefusedBusy);
+  // The refusal is 0x2222's, and names who holds the board and with what.
+  VT_EXPECT_EQ(b.results[0].session, 0x2222);
+  VT_EXPECT_EQ(b.results[0].owner, 0x1111);
+  VT_EXPECT_EQ(b.results[0].detail, static_cast<std::uint8_t>(CommandCode::kStartTrial));
   b.Run(1);
   VT_EXPECT_EQ(b.results_n, 2);
   VT_EXPECT_TRUE(b.results[1].sequence == 1 &&
@@ -753,6 +761,116 @@ MJC_VECTOR_TEST(CanNode, ABatchLostOnTheWayOutLeavesAGapInTheCount) {
   VT_EXPECT_TRUE(fd.log.gap_samples / TelemetryAngleBatch::kSamples <= dropped);
   VT_EXPECT_EQ(fd.log.batches * TelemetryAngleBatch::kSamples + fd.log.gap_samples,
                fd.log.next_first);
+}
+
+// A motion starts only with the configuration the start names: another sender's
+// TrialConfig between the host's and its start makes the start a refusal, and one that
+// arrives while the trial runs changes nothing of it. The board names what runs in the
+// motion's first frame and in every window's start.
+MJC_VECTOR_TEST(CanNode, AStartRunsOnlyTheConfigurationItNames) {
+  static Board b;
+  Calibrate(b);
+  TrialConfig ours;
+  ours.amplitude = Angle::FromDouble(0.1);
+  ours.frequency_mHz = 10000;  // 10 Hz: two windows in 0.1 s
+  ours.repetitions = 2;
+  ours.rest_100ms = 0;
+  TrialConfig foreign = ours;
+  foreign.amplitude = Angle::FromDouble(0.7);
+  foreign.repetitions = 5;
+  const ConfigDigest digest = ConfigDigestOf(ours);
+  VT_EXPECT_TRUE(digest != ConfigDigestOf(foreign));
+  // Ours, then another sender's, then our start: refused, and nothing moves.
+  b.node.HandleFrame(Encode(ours, 1));
+  b.node.HandleFrame(Encode(foreign, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 1, 0x5151, digest}, 1));
+  b.Run(3);
+  VT_EXPECT_EQ(b.results_n, 1);
+  VT_EXPECT_TRUE(b.results[0].outcome == CommandOutcomeCode::kRefusedInvalid);
+  VT_EXPECT_EQ(b.results[0].detail, kDetailConfigMismatch);
+  VT_EXPECT_EQ(b.results[0].session, 0x5151);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
+  VT_EXPECT_EQ(Sent<MotionConfig>(b), 0u);
+  // A start naming no configuration (0, as a tool of the old protocol or cansend
+  // would) is refused the same way.
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 2, 0x5151}, 1));
+  b.Run(1);
+  VT_EXPECT_EQ(b.results[1].detail, kDetailConfigMismatch);
+  // Ours again, and its start: accepted; the next frame says what runs.
+  b.node.HandleFrame(Encode(ours, 1));
+  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 3, 0x5151, digest}, 1));
+  const int starts_before = b.starts_n;
+  b.app.ISR_Tick(b.io);
+  b.node.Poll();
+  CanFrame f;
+  bool answered = false, named = false;
+  while (b.node.PopTx(&f)) {
+    CommandResult r;
+    MotionConfig m;
+    WindowStart w;
+    if (Decode(f, &w) == DecodeError::kOk && b.starts_n < 16) b.starts[b.starts_n++] = w;
+    if (Decode(f, &r) == DecodeError::kOk) {
+      answered = r.outcome == CommandOutcomeCode::kAccepted && r.sequence == 3 &&
+                 r.session == 0x5151 && r.owner == 0x5151;
+    } else if (Decode(f, &m) == DecodeError::kOk) {
+      named = answered && m.start == CommandCode::kStartTrial && m.session == 0x5151 &&
+              m.config == digest;
+    }
+  }
+  VT_EXPECT_TRUE(answered);
+  VT_EXPECT_TRUE(named);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
+  // Another sender's configuration mid-trial, and another session's start: the trial
+  // runs as started, and the refusal names who holds the board.
+  b.node.HandleFrame(Encode(foreign, 1));
+  b.node.HandleFrame(
+      Encode(Command{CommandCode::kStartTrial, 9, 0x7272, ConfigDigestOf(foreign)}, 1));
+  b.Drain();
+  const CommandResult busy = Last<CommandResult>(vt_context, b);
+  VT_EXPECT_TRUE(busy.outcome == CommandOutcomeCode::kRefusedNotIdle);
+  VT_EXPECT_EQ(busy.session, 0x7272);
+  VT_EXPECT_EQ(busy.owner, 0x5151);
+  VT_EXPECT_EQ(busy.detail, static_cast<std::uint8_t>(CommandCode::kStartTrial));
+  double widest = 0;
+  for (int i = 0; i < 3000 && b.app.state() == BoardState::kRunning; ++i) {
+    b.Run(1);
+    const double setpoint = b.app.Latest().telemetry.setpoint.ToDouble();
+    widest = std::max(widest, setpoint < 0 ? -setpoint : setpoint);
+  }
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
+  // Our two repetitions (four windows) at our amplitude, each window named ours.
+  VT_EXPECT_EQ(b.starts_n - starts_before, 4);
+  for (int i = starts_before; i < b.starts_n; ++i) {
+    VT_EXPECT_EQ(b.starts[i].config16, digest & 0xFFFFu);
+  }
+  VT_EXPECT_TRUE(widest > 0.09 && widest < 0.11);
+}
+
+// The calibration sweep is bound the same way.
+MJC_VECTOR_TEST(CanNode, ASweepRunsOnlyTheConfigurationItNames) {
+  static Board b;
+  SweepConfig ours;
+  ours.end_amplitude = Angle::FromDouble(0.3);
+  SweepConfig foreign = ours;
+  foreign.repetitions = 40;
+  b.node.HandleFrame(Encode(ours, 1));
+  b.node.HandleFrame(Encode(foreign, 1));
+  b.node.HandleFrame(
+      Encode(Command{CommandCode::kStartSweep, 1, 0x0101, ConfigDigestOf(ours)}, 1));
+  b.Run(2);
+  VT_EXPECT_TRUE(Last<CommandResult>(vt_context, b).outcome ==
+                 CommandOutcomeCode::kRefusedInvalid);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kIdle);
+  b.node.HandleFrame(Encode(ours, 1));
+  b.node.HandleFrame(
+      Encode(Command{CommandCode::kStartSweep, 2, 0x0101, ConfigDigestOf(ours)}, 1));
+  b.Run(2);
+  VT_EXPECT_TRUE(Last<CommandResult>(vt_context, b).outcome ==
+                 CommandOutcomeCode::kAccepted);
+  VT_EXPECT_TRUE(b.app.state() == BoardState::kCalibrating);
+  const MotionConfig m = Last<MotionConfig>(vt_context, b);
+  VT_EXPECT_TRUE(m.start == CommandCode::kStartSweep && m.session == 0x0101 &&
+                 m.config == ConfigDigestOf(ours));
 }
 
 }  // namespace

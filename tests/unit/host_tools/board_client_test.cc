@@ -347,6 +347,8 @@ class PacedBoardLink final : public CanLink {
   bool heartbeats = true;
   // Sent instead of the board's frames: a host's heartbeat to the node (not the board).
   bool only_host_frames = false;
+  // Sent instead: its bootloader's BootStatus (ready, held by a host's BootHold).
+  bool bootloader = false;
 
   std::uint32_t BoardTick(Time t) const {
     const double wall_ms = std::chrono::duration<double, std::milli>(t - Time{}).count();
@@ -369,6 +371,11 @@ class PacedBoardLink final : public CanLink {
     r.status = ReceiveStatus::kFrame;
     if (only_host_frames) {
       r.received.frame = protocol::Encode(protocol::HostHeartbeat{1}, kNode);
+    } else if (bootloader) {
+      protocol::BootStatus b;
+      b.state = protocol::BootState::kReady;
+      b.reason = protocol::StayReason::kHoldFrame;
+      r.received.frame = protocol::Encode(b, kNode);
     } else if (heartbeats) {
       protocol::Heartbeat h;
       h.state = protocol::BoardState::kRunning;
@@ -449,6 +456,25 @@ TEST_F(AwaitAtTheBoardsPace, ABoardWithoutHeartbeatsIsSilentOnceTheyStayAway) {
   EXPECT_NEAR(WallSeconds(), std::chrono::duration<double>(kHeartbeatSilence).count(),
               0.101);
   EXPECT_NE(why_.find("no heartbeat"), std::string::npos) << why_;
+}
+
+TEST_F(AwaitAtTheBoardsPace, ABoardInItsBootloaderIsNamedSoWithWhyItStays) {
+  link_.bootloader = true;
+  ASSERT_FALSE(AwaitBoardTime(0, {std::chrono::seconds(2), std::chrono::seconds(3)}));
+  EXPECT_EQ(end_, WaitEnd::kSilent);
+  EXPECT_NE(why_.find("node 1 is in its bootloader, ready (held by a host)"),
+            std::string::npos)
+      << why_;
+  EXPECT_EQ(why_.find("HeartbeatHz"), std::string::npos) << why_;
+}
+
+TEST_F(AwaitAtTheBoardsPace, ABoardThatFallsSilentMidMotionIsNamedSo) {
+  link_.silent_after = std::chrono::seconds(1);
+  ASSERT_FALSE(AwaitBoardTime(0, {std::chrono::seconds(60), std::chrono::seconds(3)}));
+  EXPECT_EQ(end_, WaitEnd::kSilent);
+  EXPECT_NE(why_.find("node 1 is silent"), std::string::npos) << why_;
+  EXPECT_NE(why_.find("its last heartbeat saying running"), std::string::npos) << why_;
+  EXPECT_EQ(why_.find("HeartbeatHz"), std::string::npos) << why_;
 }
 
 TEST_F(AwaitAtTheBoardsPace, TheInterruptFlagEndsItAtOnce) {

@@ -159,8 +159,9 @@ TEST(FirmwareUpdate, ABoardInAMotionIsRefusedAndNothingIsDone) {
   t.amplitude = Angle::FromDouble(0.1);
   t.repetitions = 5;
   rig.SendFromHost(protocol::Encode(t, kNode));
-  rig.SendFromHost(
-      protocol::Encode(protocol::Command{protocol::CommandCode::kStartTrial, 1}, kNode));
+  rig.SendFromHost(protocol::Encode(protocol::Command{protocol::CommandCode::kStartTrial,
+                                                      1, 0, protocol::ConfigDigestOf(t)},
+                                    kNode));
   rig.RunMs(20);
   ASSERT_EQ(rig.board()->application()->app().state(), protocol::BoardState::kRunning);
   rig.RunMs(100);

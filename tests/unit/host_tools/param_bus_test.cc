@@ -150,9 +150,7 @@ TEST_F(ParamsOnTheBus, AMotionRefusesControlParametersAndARestoreSendsNothing) {
   sweep.frequency_mHz = 100;
   sweep.repetitions = 255;
   sweep.rest_100ms = 0;
-  ASSERT_TRUE(client_.Send(sweep, &why_)) << why_;
-  const auto started =
-      client_.Command(protocol::CommandCode::kStartSweep, host::kStartAnswerMs, &why_);
+  const auto started = client_.Start(sweep, host::kStartAnswerMs, &why_);
   ASSERT_TRUE(started) << why_;
   ASSERT_EQ(*started, protocol::CommandOutcomeCode::kAccepted);
   AwaitState(protocol::BoardState::kCalibrating);

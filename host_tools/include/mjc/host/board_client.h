@@ -113,6 +113,8 @@ enum class WaitEnd : std::uint8_t {
   kLinkFailed = 3,   // this side could not send or receive
   kInterrupted = 4,  // the interrupt flag (BoardClient::SetInterrupt) was raised
   kAmbiguous = 5,    // two boards answer with this node id (BoardClient::ambiguous)
+  kWrongMotion = 6,  // the board runs another motion than the one this client started
+                     // (BoardClient::Start; motion_mismatch says which)
 };
 
 // Follows a motion a board was told to start (a trial or a stream: kRunning; a
@@ -204,8 +206,41 @@ class BoardClient {
   // Sends a command and waits for its CommandResult: nullopt when it cannot be sent, or
   // the board does not answer within timeout_ms (then *why says which). The timeout is
   // board time while the board talks, and wall-clock silence otherwise (Patience).
+  // The answer is the one to this command: its code, sequence and this client's
+  // session (another tool's answers are not taken). `config`: a start's ConfigDigest.
   std::optional<protocol::CommandOutcomeCode> Command(protocol::CommandCode code,
-                                                      int timeout_ms, std::string* why);
+                                                      int timeout_ms, std::string* why,
+                                                      protocol::ConfigDigest config = 0);
+  // The last answer Command took (its owner and detail say who holds a busy board).
+  const std::optional<protocol::CommandResult>& answer() const { return answer_; }
+  // Why the board refused the last command, in words: "node 1 is in use by session
+  // 3a1f, started by its trial (…)", "node 1 holds another configuration than …".
+  std::string RefusalMessage(protocol::CommandOutcomeCode outcome) const;
+
+  // Starts a trial or a calibration sweep bound to this session: sends `config`, then
+  // the start naming it (ConfigDigestOf), and waits for the board's MotionConfig. From
+  // the start on, the motion's frames are checked against it: a MotionConfig or a
+  // WindowStart naming another configuration or session, or a window before the
+  // board said what it runs, is a mismatch (motion_mismatch), after which no window
+  // and no angle sample is taken and every wait ends (WaitEnd::kWrongMotion). Returns
+  // kAccepted once the board runs exactly `config`; a refusal's outcome (a
+  // configuration from another sender that came between the two frames is retried
+  // twice); nullopt when unanswered, or accepted but running something else (then
+  // motion_mismatch() is true and the caller must stop it).
+  std::optional<protocol::CommandOutcomeCode> Start(const protocol::TrialConfig& config,
+                                                    int timeout_ms, std::string* why);
+  std::optional<protocol::CommandOutcomeCode> Start(const protocol::SweepConfig& config,
+                                                    int timeout_ms, std::string* why);
+  // Ends the binding of the last Start (the motion is over): later motions' frames are
+  // taken as before.
+  void ReleaseMotion();
+  // The bound motion's frames named another configuration or session; the message
+  // names both ("node 1 runs configuration 5c1d0e2a (40.0° × 5 …, another sender's),
+  // not this session's 0b7e… (6.0° × 3 …)").
+  bool motion_mismatch() const { return !mismatch_.empty(); }
+  const std::string& mismatch() const { return mismatch_; }
+  // Windows dropped because they belonged to no motion this client could vouch for.
+  std::uint64_t unbound_windows() const { return unbound_windows_; }
 
   // Sends one host message (TrialConfig, SweepConfig, …) to this node; false with the
   // reason when the link cannot send it.
@@ -328,6 +363,22 @@ class BoardClient {
   void NoteBusOff();
   // Sends `request` (a ParamRead or ParamWrite of `id`) and waits for the ParamValue of
   // `id`; `what` names the request in the timeout's message ("a parameter read").
+  template <class Config>
+  std::optional<protocol::CommandOutcomeCode> StartBound(protocol::CommandCode code,
+                                                         const Config& config,
+                                                         int timeout_ms,
+                                                         std::string* why);
+  // Why a wait ended in silence, from what the node said before it: nothing ("node 1
+  // is silent …"), a motion and then nothing, or frames without a heartbeat (its
+  // bootloader's BootStatus and why it stays, or heartbeats switched off).
+  std::string SilenceMessage() const;
+  std::string NoHeartbeatMessage() const;
+  // A frame of the bound motion named something else: `what` says what.
+  void Mismatch(const std::string& what);
+  // What a ConfigDigest names: ours, or a configuration frame seen on the bus.
+  std::string NameConfig(protocol::ConfigDigest digest) const;
+  // Whether a window or sample of the bound motion may be taken now.
+  bool MotionTrusted() const { return !bound_ || (confirmed_ && mismatch_.empty()); }
   template <class Request>
   std::optional<protocol::ParamValue> AskParam(const Request& request,
                                                protocol::ParamId id, int timeout_ms,
@@ -354,6 +405,20 @@ class BoardClient {
   std::vector<AngleSample> angles_;
   AngleSequence angle_sequence_;
   std::optional<protocol::CommandResult> last_result_;
+  std::optional<protocol::CommandResult> answer_;
+  // The bootloader's last BootStatus, until the application's heartbeat is heard.
+  std::optional<protocol::BootStatus> boot_status_;
+  // The motion this client started (Start) and whether the board confirmed it runs it.
+  bool bound_ = false;
+  bool confirmed_ = false;
+  protocol::CommandCode bound_code_ = protocol::CommandCode::kStartTrial;
+  protocol::ConfigDigest bound_config_ = 0;
+  std::string bound_name_;
+  std::string mismatch_;
+  std::uint64_t unbound_windows_ = 0;
+  // Configuration frames other senders sent this node (the newest 8): what names a
+  // digest that is not ours.
+  std::vector<std::pair<protocol::ConfigDigest, std::string>> configs_seen_;
   std::optional<protocol::ParamValue> last_param_;
   std::uint64_t frames_ = 0;
   std::uint64_t heartbeats_heard_ = 0;

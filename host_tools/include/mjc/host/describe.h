@@ -50,6 +50,13 @@ std::string DescribeBootStatus(const protocol::BootStatus& status);
 // silent (is the board powered and on vcan0? try mjc list)".
 std::string SilentNode(int node, std::string_view iface);
 
+// A motion's configuration in a few words: "6.0° × 3 at 0.50 Hz, rest 1.5 s" (a trial),
+// "sweep to 30.0° × 10 at 1.50 Hz, rest 0.5 s".
+std::string DescribeConfig(const protocol::TrialConfig& config);
+std::string DescribeConfig(const protocol::SweepConfig& config);
+// "trial", "calibration sweep", "stream" for a start's code; "motion" otherwise.
+std::string_view MotionName(std::uint8_t start_code);
+
 // Why the board refused a command ("the board is not idle"), or "accepted".
 std::string_view OutcomeName(protocol::CommandOutcomeCode outcome);
 

@@ -21,6 +21,8 @@ enum class TrialEnd : std::uint8_t {
   kInterrupted = 5,  // the client's interrupt flag was raised (a signal)
   kStopped = 6,      // the board went idle before the trial's end (another tool's stop)
   kAmbiguous = 7,    // two boards answer with the node's id (BoardClient::ambiguous)
+  kWrongConfig = 8,  // the board runs another configuration or session's motion than
+                     // the one started (nothing of it recorded; the caller stops it)
 };
 
 struct BoardTrial {

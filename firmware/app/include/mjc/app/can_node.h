@@ -121,12 +121,17 @@ class CanNode {
   // What a command handed to the app came from, for answering its verdict.
   enum class Origin : std::uint8_t { kCommand = 1, kParam = 2, kCalibration = 3 };
 
-  // Request tags: the origin in the top byte; a command's code and sequence, or a
-  // parameter's id, below.
+  // Request tags: the origin in bits 24-31; a command's code and sequence, or a
+  // parameter's id, below; a command's session in bits 32-47 (its answer names it).
   static RequestTag Tag(Origin origin, std::uint32_t low) {
-    return (std::uint32_t{static_cast<std::uint8_t>(origin)} << 24) | low;
+    return (RequestTag{static_cast<std::uint8_t>(origin)} << 24) | low;
   }
-  static Origin OriginOf(RequestTag tag) { return static_cast<Origin>(tag >> 24); }
+  static Origin OriginOf(RequestTag tag) {
+    return static_cast<Origin>((tag >> 24) & 0xFFu);
+  }
+  static protocol::SessionId SessionOf(RequestTag tag) {
+    return static_cast<protocol::SessionId>((tag >> 32) & 0xFFFFu);
+  }
 
   template <class M>
   void Send(const M& message) {
@@ -163,8 +168,9 @@ class CanNode {
   JointApp* app_;
   CanNodeConfig config_;
   CanNodeCounters counters_;
-  // 64 frames: a pass of the main loop queues at most a window (5 frames), the
-  // telemetry due (7) and a reply to each frame it took (JointBoard::kMostFramesPerPoll).
+  // 64 frames: a pass of the main loop queues at most a window (7 frames), the
+  // telemetry due (7), a reply to each frame it took (JointBoard::kMostFramesPerPoll)
+  // and a started motion's MotionConfig.
   SpscQueue<protocol::CanFrame, 64> tx_;
   BoardClock clock_;
   protocol::TrialConfig trial_;
@@ -194,6 +200,13 @@ class CanNode {
   bool start_pending_ = false;
   protocol::SessionId start_session_ = 0;
   protocol::SessionId motion_session_ = 0;
+  // What the pending start and the motion last started run: their start code and the
+  // digest of their configuration (MotionConfig, WindowStart). motion_code_ is 0 while
+  // no motion runs (a refused start names the one that holds the board).
+  protocol::CommandCode start_code_ = protocol::CommandCode::kStop;
+  protocol::ConfigDigest start_config_ = 0;
+  std::uint8_t motion_code_ = 0;
+  protocol::ConfigDigest motion_config_ = 0;
   std::uint32_t last_host_tick_ = 0;
   // A BootHold was accepted: the board is on its way into the bootloader.
   bool leaving_ = false;

@@ -37,8 +37,9 @@ struct CommandOutcome {
   std::uint8_t detail = 0;  // the validating module's stable error code, when invalid
 };
 
-// The submitter's name for a command, returned unchanged with the tick's verdict.
-using RequestTag = std::uint32_t;
+// The submitter's name for a command, returned unchanged with the tick's verdict (64
+// bits: the CAN node names a command by its origin, code, sequence and session).
+using RequestTag = std::uint64_t;
 
 struct AppEvent {
   enum class Kind : std::uint8_t {

@@ -6,9 +6,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <tuple>
+#include <type_traits>
 
 #include "mjc/protocol/can_frame.h"
+#include "mjc/protocol/crc32.h"
 #include "mjc/protocol/little_endian.h"
 #include "mjc/protocol/messages.h"
 
@@ -155,6 +158,16 @@ constexpr DecodeError Decode(const CanFrame& frame, M* out) {
   if (!ok) return DecodeError::kFieldOutOfRange;
   *out = decoded;
   return DecodeError::kOk;
+}
+
+// The name of a motion's configuration (ConfigDigest, messages.h): the CRC-32 of its
+// frame's payload as encoded. Host and board encode the same values to the same bytes
+// (every bit of a TrialConfig or SweepConfig is a field), so both compute the same name.
+template <class M>
+constexpr ConfigDigest ConfigDigestOf(const M& config) {
+  static_assert(std::is_same_v<M, TrialConfig> || std::is_same_v<M, SweepConfig>);
+  const CanFrame frame = Encode(config, kMinNode);
+  return Crc32(std::span<const std::uint8_t>(frame.data.data(), frame.length));
 }
 
 }  // namespace mjc::protocol

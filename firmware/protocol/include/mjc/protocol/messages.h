@@ -83,6 +83,7 @@ enum class Function : std::uint8_t {
   kWindowTicks = 0x0C,
   kWindowFit = 0x0D,
   kWindowFitResidual = 0x0E,
+  kMotionConfig = 0x0F,  // board → host: the motion that started and what it runs
   kParamWrite = 0x10,
   kParamRead = 0x11,
   kParamValue = 0x12,
@@ -112,8 +113,8 @@ enum class Sender : std::uint8_t { kBoard, kHost };
 enum class CommandCode : std::uint8_t {
   kStop = 1,
   kClearFaults = 2,
-  kStartTrial = 3,   // with the last TrialConfig
-  kStartSweep = 4,   // with the last SweepConfig
+  kStartTrial = 3,   // with the last TrialConfig, if it is the one the command names
+  kStartSweep = 4,   // with the last SweepConfig, if it is the one the command names
   kStartStream = 5,  // streamed setpoints from the present position
 };
 constexpr bool ValidEnumValue(CommandCode c) {
@@ -164,20 +165,43 @@ struct FaultEvent {
 // heartbeats, e.g. cansend): its motions are not supervised.
 using SessionId = std::uint16_t;
 
+// A motion's configuration by name: the CRC-32 of the TrialConfig or SweepConfig
+// payload as encoded (ConfigDigestOf, codec.h). A configuration frame carries no sender,
+// so the board cannot tell whose it holds; the start names the configuration its
+// session sent instead, and the board starts only when the one it holds is that one —
+// any other sender's frame since, or a changed one, makes the start a refusal
+// (kDetailConfigMismatch). What runs is then reported under the same name
+// (MotionConfig, WindowStart) for the host to check before it records anything.
+using ConfigDigest = std::uint32_t;
+
+// kRefusedInvalid's detail for a start whose config digest is not that of the
+// configuration the board holds (another sender's came since, or none was sent).
+inline constexpr std::uint8_t kDetailConfigMismatch = 65;
+
 struct Command {
   CommandCode code = CommandCode::kStop;
   std::uint8_t sequence = 0;
   SessionId session = 0;  // who commands: binds a started motion to its heartbeats
+  // kStartTrial, kStartSweep: the digest of the configuration this session sent (the
+  // board refuses the start unless it holds that one); 0 and unused otherwise.
+  ConfigDigest config = 0;
 };
 struct Setpoint {
   Angle position;
   std::uint16_t sequence = 0;
 };
+// The answer names the command it answers by its code, sequence and session, so that
+// two tools commanding one board never take each other's answers. `owner` is the
+// session whose motion the board runs or is starting (0: none, or one started without
+// a session): a refused start (kRefusedNotIdle, kRefusedBusy) says who holds the board,
+// and then `detail` is the code of the start that holds it (0: none).
 struct CommandResult {
   CommandCode code = CommandCode::kStop;
   CommandOutcomeCode outcome = CommandOutcomeCode::kAccepted;
   std::uint8_t detail = 0;
   std::uint8_t sequence = 0;
+  SessionId session = 0;
+  SessionId owner = 0;
 };
 struct TrialConfig {
   Angle amplitude;
@@ -197,9 +221,21 @@ struct SweepConfig {
 // --sync-line). start_tick is the WindowTicks.start_tick of the summary that follows
 // at the window's end (the tracker's start, aligned by the velocity estimator's delay,
 // lands on the same tick), unless the main loop missed ticks.
+// config16: the low 16 bits of the ConfigDigest of the motion the window belongs to
+// (MotionConfig names it whole), so a window is never taken for another motion's.
 struct WindowStart {
   Motion motion = Motion::kFlexion;
   std::uint32_t start_tick = 0;
+  std::uint16_t config16 = 0;
+};
+// A motion started: the board's first frame of it, right after the accepted start's
+// CommandResult. Which start (kStartTrial, kStartSweep, kStartStream), the session that
+// started it and the digest of the configuration it runs (0 for a stream), taken when
+// the start was accepted: what runs, whoever sent a configuration since.
+struct MotionConfig {
+  CommandCode start = CommandCode::kStartTrial;
+  SessionId session = 0;
+  ConfigDigest config = 0;
 };
 struct WindowHeader {
   Motion motion = Motion::kFlexion;
@@ -505,17 +541,20 @@ struct Message;
 MJC_MESSAGE(FaultEvent, kFault, 7, kBoard, MakeSignal("fault_code", &T::fault, 0, 16),
             MakeSignal("tick", &T::tick, 16, 32, "tick"),
             MakeSignal("state", &T::state, 48, 8));
-MJC_MESSAGE(Command, kCommand, 4, kHost, MakeSignal("command", &T::code, 0, 8),
+MJC_MESSAGE(Command, kCommand, 8, kHost, MakeSignal("command", &T::code, 0, 8),
             MakeSignal("sequence", &T::sequence, 8, 8),
-            MakeSignal("session", &T::session, 16, 16));
+            MakeSignal("session", &T::session, 16, 16),
+            MakeSignal("config", &T::config, 32, 32));
 MJC_MESSAGE(Setpoint, kSetpoint, 6, kHost,
             MakeSignal("position_rad", &T::position, 0, 32, "rad"),
             MakeSignal("sequence", &T::sequence, 32, 16));
-MJC_MESSAGE(CommandResult, kCommandResult, 4, kBoard,
+MJC_MESSAGE(CommandResult, kCommandResult, 8, kBoard,
             MakeSignal("command", &T::code, 0, 8),
             MakeSignal("outcome", &T::outcome, 8, 8),
             MakeSignal("detail", &T::detail, 16, 8),
-            MakeSignal("sequence", &T::sequence, 24, 8));
+            MakeSignal("sequence", &T::sequence, 24, 8),
+            MakeSignal("session", &T::session, 32, 16),
+            MakeSignal("owner", &T::owner, 48, 16));
 MJC_MESSAGE(TrialConfig, kTrialConfig, 8, kHost,
             MakeSignal("amplitude_rad", &T::amplitude, 0, 32, "rad"),
             MakeSignal("frequency_mHz", &T::frequency_mHz, 32, 16, "mHz"),
@@ -526,8 +565,12 @@ MJC_MESSAGE(SweepConfig, kSweepConfig, 8, kHost,
             MakeSignal("frequency_mHz", &T::frequency_mHz, 32, 16, "mHz"),
             MakeSignal("repetitions", &T::repetitions, 48, 8),
             MakeSignal("rest_100ms", &T::rest_100ms, 56, 8, "100 ms"));
-MJC_MESSAGE(WindowStart, kWindowStart, 5, kBoard, MakeSignal("motion", &T::motion, 0, 8),
-            MakeSignal("start_tick", &T::start_tick, 8, 32, "tick"));
+MJC_MESSAGE(WindowStart, kWindowStart, 7, kBoard, MakeSignal("motion", &T::motion, 0, 8),
+            MakeSignal("start_tick", &T::start_tick, 8, 32, "tick"),
+            MakeSignal("config16", &T::config16, 40, 16));
+MJC_MESSAGE(MotionConfig, kMotionConfig, 7, kBoard, MakeSignal("start", &T::start, 0, 8),
+            MakeSignal("session", &T::session, 8, 16),
+            MakeSignal("config", &T::config, 24, 32));
 MJC_MESSAGE(WindowHeader, kWindowHeader, 8, kBoard,
             MakeSignal("motion", &T::motion, 0, 8),
             MakeSignal("repetition", &T::repetition, 8, 16),
@@ -635,7 +678,7 @@ using AllMessages =
                ParamRead, ParamValue, TelemetryAngles, TelemetryAngleBatch,
                TelemetryTorque, TelemetryPower, TelemetryEnergy, TelemetryControl,
                Heartbeat, BoardInfo, HostHeartbeat, BootStatus, BootHold, BootCommand,
-               BootResult, ChipInfo>;
+               BootResult, ChipInfo, MotionConfig>;
 
 namespace detail {
 template <class... M>
