@@ -63,7 +63,10 @@ std::string TravelViolation(double amplitude_deg, const JointTravel& travel) {
   const double joint_deg = std::abs(travel.alpha) * amplitude_deg;
   const double min_deg = RadToDeg(travel.min_rad);
   const double max_deg = RadToDeg(travel.max_rad);
-  if (joint_deg <= max_deg && -joint_deg >= min_deg) return "";
+  // The travel reached the board rounded inwards by up to a step of its format (2^-24
+  // rad, 3.4e-6°): an excursion within a few steps of it is on the travel, not beyond.
+  constexpr double kSlackDeg = 1e-5;
+  if (joint_deg <= max_deg + kSlackDeg && -joint_deg >= min_deg - kSlackDeg) return "";
   char text[200];
   std::snprintf(text, sizeof text,
                 "%.1f° moves the joint ±%.1f° (α %.3f), beyond its travel [%.1f°, %.1f°]",
