@@ -25,6 +25,7 @@
 #include "mjc/host/calibration_fit.h"
 #include "mjc/host/calibration_io.h"
 #include "mjc/host/describe.h"
+#include "mjc/host/joint_limits.h"
 #include "mjc/host/report.h"
 #include "mjc/host/robot_description.h"
 #include "mjc/host/run_record.h"
@@ -160,6 +161,19 @@ void AddCalibrate(CLI::App& app) {
       }
       run.calibration = *held;
       host::WriteRunRecord(run, dir);
+      // The joint's own torque and travel limits, before anything moves: the board's
+      // supervisor stops the sweep at them, and its torque_max stays within the
+      // joint's rating; a board holding tighter ones (since its reset) refuses these.
+      if (robot) {
+        const host::ParamWriteOutcome limits = host::SendJointLimits(board, *robot, 500);
+        if (limits.end == host::ParamWriteEnd::kNoAnswer) {
+          throw Failure(NoAnswer(board), limits.why + "; nothing moved");
+        }
+        if (limits.end != host::ParamWriteEnd::kDone) {
+          throw Failure(Exit::kRefused, "sending " + robot->name + "'s limits: " +
+                                            limits.why + "; nothing moved");
+        }
+      }
       // The board sends an angle sample every tick_hz / rate ticks: exactly this rate
       // when it divides the tick rate, as the default 1 kHz does.
       const auto rate_hz = board.ReadParam(ParamId::kTelemetryAnglesHz, 500, &why);

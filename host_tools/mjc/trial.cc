@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,8 @@
 #include "mjc/build_id.h"
 #include "mjc/host/calibration_io.h"
 #include "mjc/host/describe.h"
+#include "mjc/host/joint_limits.h"
+#include "mjc/host/robot_description.h"
 #include "mjc/host/run_record.h"
 #include "mjc/host/trial_report.h"
 #include "mjc/host/trial_runner.h"
@@ -65,6 +68,7 @@ void AddTrial(CLI::App& app) {
   static bool pause = false, figure = true;
   static EstopOptions estop_options;
   static std::string sync_name;
+  static std::string robot_path;
   AddIfaceOption(cmd, &iface);
   AddNodeOption(cmd, &node);
   cmd->add_option("--protocol", protocol_name, "repeatability or amplitude")
@@ -99,7 +103,17 @@ void AddTrial(CLI::App& app) {
                   "start is an edge; none: no trigger")
       ->check(LineSpecCheck(true))
       ->capture_default_str();
+  cmd->add_option("--robot", robot_path,
+                  "Robot description of the joint (robots/*.json): its torque and travel "
+                  "limits go to the board before anything moves");
   cmd->callback([] {
+    // The joint's description first: a bad file moves nothing and writes nothing.
+    std::optional<host::RobotDescription> robot;
+    if (!robot_path.empty()) {
+      std::string why;
+      robot = host::LoadRobotDescription(robot_path, &why);
+      if (!robot) throw Failure("robot description refused: " + why);
+    }
     const std::filesystem::path dir =
         PrepareOutputs("mjc trial", output, "out/trial", kTrialOutputs);
     const std::string saved = (dir / "windows.csv").string();
@@ -195,6 +209,28 @@ void AddTrial(CLI::App& app) {
       if (!held) throw Failure(NoAnswer(board), "cannot read its calibration: " + why);
       record.calibration = *held;
       host::WriteRunRecord(record, dir);
+      // The joint's limits (the description's, sent first), and every amplitude of
+      // the plan within the joint's travel the board holds, before anything moves.
+      if (robot) {
+        const host::ParamWriteOutcome limits = host::SendJointLimits(board, *robot, 500);
+        if (limits.end == host::ParamWriteEnd::kNoAnswer) {
+          throw end(NoAnswer(board), limits.why + "; nothing moved");
+        }
+        if (limits.end != host::ParamWriteEnd::kDone) {
+          throw end(Exit::kRefused, "sending " + robot->name +
+                                        "'s limits: " + limits.why + "; nothing moved");
+        }
+      }
+      const auto travel = host::ReadJointTravel(board, 500, &why);
+      if (!travel) throw end(NoAnswer(board), "cannot read its joint's travel: " + why);
+      for (const double amplitude : plan) {
+        const std::string beyond = host::TravelViolation(amplitude, *travel);
+        if (!beyond.empty()) {
+          throw end(Exit::kUsage,
+                    "node " + std::to_string(node) + ": " + beyond +
+                        " (joint_angle_min, joint_angle_max); nothing moved");
+        }
+      }
       for (std::size_t t = 0; t < plan.size(); ++t) {
         if (pause && t > 0) {
           std::fprintf(stderr, "re-don, then press Enter for trial %zu/%zu\n", t + 1,

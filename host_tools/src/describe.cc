@@ -115,11 +115,19 @@ std::string_view ParamStatusName(protocol::ParamStatus status) {
       return "out of range, or refused by the board's check of its whole control "
              "configuration";
     case ParamStatus::kRefusedNotIdle:
-      return "the board is not idle (control parameters change only while it is)";
+      return "a motion runs (the protections and the control parameters change only "
+             "while the board is idle)";
     case ParamStatus::kReadOnly:
       return "read-only";
     case ParamStatus::kRefusedBusy:
       return "an earlier write or calibration is still being applied: try again";
+    case ParamStatus::kBelowMinimum:
+      return "below its minimum";
+    case ParamStatus::kAboveMaximum:
+      return "above its maximum (the image's ceiling)";
+    case ParamStatus::kBeyondJointLimit:
+      return "beyond the joint's limit the board holds (from its robot description; "
+             "only a reset of the board loosens it)";
   }
   return "unknown status";
 }

@@ -112,6 +112,10 @@ std::string_view ParamAccessName(ParamAccess access) {
       return "node";
     case ParamAccess::kControl:
       return "control";
+    case ParamAccess::kGuard:
+      return "guard";
+    case ParamAccess::kJointLimit:
+      return "joint limit";
     case ParamAccess::kReadOnly:
       break;
   }
@@ -237,11 +241,22 @@ ParamWriteOutcome WriteParams(BoardClient& board, std::span<const ParamSetting> 
     if (!answer) return end(ParamWriteEnd::kNoAnswer, "writing " + key + ": " + why);
     if (answer->status != protocol::ParamStatus::kOk) {
       out.status = answer->status;
-      // Within the list's range (checked before sending), so the board's check of the
-      // whole configuration refused it: the parameter's description names its rule.
-      const std::string rule = answer->status == protocol::ParamStatus::kOutOfRange
-                                   ? std::string(" (") + s.info->what + ")"
-                                   : "";
+      std::string rule;
+      switch (answer->status) {
+        case protocol::ParamStatus::kOutOfRange:
+          // Within the list's range, so the board's check of the whole configuration
+          // refused it: the parameter's description names its rule.
+          rule = std::string(" (") + s.info->what + ")";
+          break;
+        case protocol::ParamStatus::kBelowMinimum:
+        case protocol::ParamStatus::kAboveMaximum:
+        case protocol::ParamStatus::kBeyondJointLimit:
+          // The board names the bound (its list may be another build's than ours).
+          rule = ": " + FormatParamWithUnit(*s.info, answer->value);
+          break;
+        default:
+          break;
+      }
       return end(ParamWriteEnd::kRefused,
                  Node(board) + " refused " + value + ": " +
                      std::string(ParamStatusName(answer->status)) + rule);
@@ -268,7 +283,7 @@ ParamWriteOutcome RestoreParams(BoardClient& board,
   };
   const BoardStatus& status = board.status();
   const bool control = std::any_of(settings.begin(), settings.end(), [](const auto& s) {
-    return s.info->access == ParamAccess::kControl;
+    return protocol::RefusedWhileMoving(s.info->access);
   });
   if (control && !status.heard) {
     return end(ParamWriteEnd::kNoAnswer, "no heartbeat heard from " + Node(board) +
@@ -285,8 +300,8 @@ ParamWriteOutcome RestoreParams(BoardClient& board,
                        : " (a calibration sweep)");
     return end(ParamWriteEnd::kNotIdle,
                Node(board) + " " + doing +
-                   ": the board takes control parameters only while idle; nothing was "
-                   "sent");
+                   ": the board takes control parameters and protections only while "
+                   "idle; nothing was sent");
   }
   std::vector<const ParamInfo*> which;
   for (const ParamSetting& s : settings) which.push_back(s.info);

@@ -13,6 +13,7 @@
 
 #include "mjc/core/encoder.h"
 #include "mjc/host/calibration_io.h"
+#include "mjc/protocol/params.h"
 #include "mjc/strict_json.h"
 
 namespace mjc::host {
@@ -28,8 +29,12 @@ constexpr std::string_view kJointEncoderKeys[] = {"counts_per_rev", "zero_count"
 constexpr std::string_view kLimitKeys[] = {"extension_deg", "flexion_deg", "torque_Nm"};
 constexpr std::string_view kCableKeys[] = {"friction_Nm"};
 
-// The board's joint limit (SupervisorConfig::joint_min/max, ±1.6 rad), in degrees.
-constexpr double kBoardJointLimitDeg = 1.6 * 180.0 / std::numbers::pi;
+// The board's joint limit (protocol::kJointAngleCeiling, ±1.6 rad), in degrees.
+constexpr double kBoardJointLimitDeg =
+    protocol::kJointAngleCeiling.ToDouble() * 180.0 / std::numbers::pi;
+// The board's torque ceiling (protocol::kTorqueCeiling): a rating above it could not be
+// held by the board.
+constexpr double kBoardTorqueCeilingNm = protocol::kTorqueCeiling.ToDouble();
 
 std::string Number(double v) {
   char text[32];
@@ -109,7 +114,8 @@ RobotDescription Parse(std::string_view text, std::string_view source) {
            "must have extension_deg < 0 < flexion_deg (the joint at zero "
            "must be inside its travel)");
   }
-  d.torque_limit_Nm = Plausible(r, limits, "limits", "torque_Nm", 1e-3, 5.0, "N·m");
+  d.torque_limit_Nm =
+      Plausible(r, limits, "limits", "torque_Nm", 1e-3, kBoardTorqueCeilingNm, "N·m");
   if (root.contains("cable")) {
     const Json& cable = r.Section(root, "cable", kCableKeys);
     d.cable_friction_Nm = Plausible(r, cable, "cable", "friction_Nm", 0.0,

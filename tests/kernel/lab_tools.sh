@@ -84,7 +84,7 @@ check "  and the earlier run is untouched" cmp windows.before "${dir:-.}/windows
 check "mjc param dump writes node 1's parameters" \
   "$mjc" param dump --iface vcan0 --node 1 -o params1.json
 check "  this protocol, the node, its build, the board's values in the list's units" \
-  jq -e ".protocol_version == 1 and .node == 1 and (.build | startswith(\"$build\")) and .params.heartbeat_hz == 10 and .params.telemetry_angles_hz == 1000 and .params.position_kp == 40 and .read_only.calibrated == 0 and .read_only.protocol_version == 1" params1.json
+  jq -e ".protocol_version == 2 and .node == 1 and (.build | startswith(\"$build\")) and .params.heartbeat_hz == 10 and .params.telemetry_angles_hz == 1000 and .params.position_kp == 40 and .read_only.calibrated == 0 and .read_only.protocol_version == 2" params1.json
 "$mjc" param set --iface vcan0 --node 1 telemetry_torque_hz=20 position_kp=0.1 >set.out 2>set.err
 check_exit $? 0 "mjc param set writes two parameters and reads them back"
 check "  saying what a value between steps will be stored as" grep -qx \
@@ -95,11 +95,11 @@ held() {  # what node 1 holds of the two: both as set
     jq -se 'length == 2 and .[0].raw == 6554 and .[0].value == 0.100006103515625 and .[1].value == 20'
 }
 check "mjc param get --json reads them back" held
-jq '.protocol_version = 2' params1.json >v2.json
+jq '.protocol_version = 1' params1.json >v1.json
 check "a dump of another protocol version is refused: one line, exit 1" \
-  refuses 1 v2.err "$mjc" param restore --iface vcan0 --node 1 v2.json
+  refuses 1 v1.err "$mjc" param restore --iface vcan0 --node 1 v1.json
 check "  saying so; nothing sent" grep -q \
-  "^mjc param restore: v2.json: dumped under protocol version 2, and this mjc speaks 1: .*; nothing was sent$" v2.err
+  "^mjc param restore: v1.json: dumped under protocol version 1, and this mjc speaks 2: .*; nothing was sent$" v1.err
 jq '.params.posiion_kp = 1' params1.json >misspelt.json
 check "an unknown key is refused with a did-you-mean" \
   refuses 1 misspelt.err "$mjc" param restore --iface vcan0 --node 1 misspelt.json
@@ -111,7 +111,7 @@ check "  naming it" grep -q "readonly.json: params.calibration_alpha is read-onl
 jq '.params.heartbeat_hz = 20000' params1.json >range.json
 check "a value out of range is refused" \
   refuses 1 range.err "$mjc" param restore --iface vcan0 --node 1 range.json
-check "  with its range" grep -q "range.json: params.heartbeat_hz: 20000 is outside 0..10000 Hz; nothing was sent$" range.err
+check "  with its range" grep -q "range.json: params.heartbeat_hz: 20000 is outside 10..1000 Hz; nothing was sent$" range.err
 check "  nothing was sent: node 1 holds what was set" held
 "$mjc" param restore --iface vcan0 --node 1 params1.json >restore.out 2>restore.err
 check_exit $? 0 "mjc param restore brings the dump back"
@@ -126,7 +126,7 @@ check "a long trial runs on node 2" wait_for long.err "repetition 1/50"
 check "mjc param restore refuses while it runs: exit 4, one line" \
   refuses 4 busy.err "$mjc" param restore --iface vcan0 --node 2 params2.json
 check "  saying why; nothing sent" grep -qx \
-  "mjc param restore: node 2 is running (a trial or a stream): the board takes control parameters only while idle; nothing was sent" busy.err
+  "mjc param restore: node 2 is running (a trial or a stream): the board takes control parameters and protections only while idle; nothing was sent" busy.err
 kill -INT "$long"
 wait "$long"
 check_exit $? 6 "  the trial, interrupted, stops the board"

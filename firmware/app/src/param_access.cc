@@ -64,6 +64,18 @@ constexpr bool VisitParam(ParamId id, CanNodeConfig& node, ControlConfig& contro
     case ParamId::kTorqueMax:
       visit(control.supervisor.torque_max);
       return true;
+    case ParamId::kJointTorqueLimit:
+      visit(node.joint_torque_limit);
+      return true;
+    case ParamId::kJointAngleMin:
+      visit(control.supervisor.joint_min);
+      return true;
+    case ParamId::kJointAngleMax:
+      visit(control.supervisor.joint_max);
+      return true;
+    case ParamId::kVelocityMax:
+      visit(control.supervisor.velocity_max);
+      return true;
     case ParamId::kCalibrationRight:
       visit(control.backlash.c_right);
       return true;
@@ -141,6 +153,30 @@ bool WriteParam(ParamId id, std::int32_t raw, const ParamFields& f) {
   VisitParam(id, *f.node, *f.control, *f.calibrated,
              [&](auto& field) { written = SetRaw(&field, raw); });
   return written;
+}
+
+bool BeyondJointLimit(ParamId id, std::int32_t raw, const ParamFields& f,
+                      std::int32_t* bound) {
+  const SupervisorConfig& s = f.control->supervisor;
+  switch (id) {
+    case ParamId::kTorqueMax:
+    case ParamId::kJointTorqueLimit:
+      *bound = f.node->joint_torque_limit.raw();
+      return raw > *bound;
+    case ParamId::kJointAngleMin:
+      *bound = s.joint_min.raw();
+      return raw < *bound;
+    case ParamId::kJointAngleMax:
+      *bound = s.joint_max.raw();
+      return raw > *bound;
+    default:
+      return false;
+  }
+}
+
+void KeepWithinJointLimits(const ParamFields& f) {
+  Torque& torque = f.control->supervisor.torque_max;
+  if (torque > f.node->joint_torque_limit) torque = f.node->joint_torque_limit;
 }
 
 }  // namespace mjc::app

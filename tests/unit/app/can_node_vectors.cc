@@ -219,7 +219,8 @@ MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
                  Sent<TelemetryAngles>(b) - before <= 11);
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kTelemetryAnglesHz, 20000}, 1));
   b.Run(1);
-  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOutOfRange);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kAboveMaximum);
+  VT_EXPECT_EQ(Last<ParamValue>(vt_context, b).value, 10000);  // the bound
   VT_EXPECT_EQ(b.node.config().rates.angles_hz, 100);
   // A control gain: written while idle, refused while running.
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kPositionKp, 40 << 16}, 1));
@@ -233,7 +234,7 @@ MJC_VECTOR_TEST(CanNode, ParametersReadWriteAndRefusals) {
   const Torque torque_max = b.app.control().config().supervisor.torque_max;
   b.node.HandleFrame(Encode(ParamWrite{ParamId::kTorqueMax, -(1 << 24)}, 1));
   b.Run(1);
-  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kOutOfRange);
+  VT_EXPECT_TRUE(Last<ParamValue>(vt_context, b).status == ParamStatus::kBelowMinimum);
   VT_EXPECT_TRUE(b.app.control().config().supervisor.torque_max == torque_max);
   Calibrate(b);
   b.node.HandleFrame(Encode(Command{CommandCode::kStartStream, 5}, 1));

@@ -55,7 +55,7 @@ TEST(Describe, EveryCommandOutcomeHasItsOwnName) {
 
 TEST(Describe, EveryParamStatusHasItsOwnName) {
   EXPECT_EQ(
-      ExpectOwnNames<protocol::ParamStatus>(host::ParamStatusName, "unknown status"), 6u);
+      ExpectOwnNames<protocol::ParamStatus>(host::ParamStatusName, "unknown status"), 9u);
 }
 
 TEST(Describe, EveryCalibrationRefusalSaysWhichField) {

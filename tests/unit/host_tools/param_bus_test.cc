@@ -8,6 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <string>
 #include <thread>
 #include <vector>
@@ -161,7 +164,7 @@ TEST_F(ParamsOnTheBus, AMotionRefusesControlParametersAndARestoreSendsNothing) {
   EXPECT_EQ(restore.end, ParamWriteEnd::kNotIdle);
   EXPECT_EQ(restore.why,
             "node 3 is calibrating (a calibration sweep): the board takes control "
-            "parameters only while idle; nothing was sent");
+            "parameters and protections only while idle; nothing was sent");
   EXPECT_EQ(WritesSent(), 0);
 
   // One write: the board's own refusal, with its reason.
@@ -170,11 +173,17 @@ TEST_F(ParamsOnTheBus, AMotionRefusesControlParametersAndARestoreSendsNothing) {
   EXPECT_EQ(set.end, ParamWriteEnd::kRefused);
   EXPECT_EQ(set.status, ParamStatus::kRefusedNotIdle);
   EXPECT_EQ(set.why,
-            "node 3 refused position_kp = 1: the board is not idle (control parameters "
-            "change only while it is)");
+            "node 3 refused position_kp = 1: a motion runs (the protections and the "
+            "control parameters change only while the board is idle)");
   EXPECT_EQ(WritesSent(), 1);
 
-  // The node's own settings apply at once, sweep or not: a restore of those alone runs.
+  // A protection of the node's own (a timeout) stays as the motion started under it.
+  const std::vector<host::ParamSetting> timeout = {Set("host_timeout_ms=500")};
+  const host::ParamWriteOutcome guard = host::WriteParams(client_, timeout, kTimeoutMs);
+  EXPECT_EQ(guard.end, ParamWriteEnd::kRefused);
+  EXPECT_EQ(guard.status, ParamStatus::kRefusedNotIdle);
+
+  // The telemetry rates apply at once, sweep or not: a restore of those alone runs.
   nlohmann::json rates = {{"protocol_version", protocol::kVersion},
                           {"params", {{"telemetry_torque_hz", 20}}}};
   const host::ParamWriteOutcome node =
@@ -187,6 +196,115 @@ TEST_F(ParamsOnTheBus, AMotionRefusesControlParametersAndARestoreSendsNothing) {
   AwaitState(protocol::BoardState::kIdle);
   const host::ParamWriteOutcome idle = host::WriteParams(client_, kp, kTimeoutMs);
   EXPECT_EQ(idle.end, ParamWriteEnd::kDone) << idle.why;
+}
+
+// A dump of each writable parameter at each end of its range goes through mjc param
+// restore's path (the file's checks, then RestoreParams against the board): an end is
+// taken and read back, unless the board's check of its whole configuration refuses it
+// (kOutOfRange, the old value kept). One step beyond either end the file is refused
+// before anything is sent, and, the host's check bypassed, the board refuses it too,
+// naming the bound, and keeps what it held. A joint limit, once tightened, refuses its
+// loose end as beyond the joint's limit.
+TEST_F(ParamsOnTheBus, ARestoreOfEveryParametersExtremesKeepsEveryProtectionOn) {
+  const auto read = [&](const protocol::ParamInfo& info) {
+    const auto v = client_.ReadParam(info.id, kTimeoutMs, &why_);
+    EXPECT_TRUE(v) << info.key << ": " << why_;
+    return v.value_or(0);
+  };
+  // A dump holding `raw` for `info` alone, as mjc param dump writes the value.
+  const auto dump_of = [&](const protocol::ParamInfo& info, std::int64_t raw) {
+    nlohmann::json dump = {{"protocol_version", protocol::kVersion},
+                           {"params", nlohmann::json::object()}};
+    if (info.frac_bits == 0) {
+      dump["params"][info.key] = raw;
+    } else {
+      dump["params"][info.key] = std::ldexp(static_cast<double>(raw), -info.frac_bits);
+    }
+    return dump;
+  };
+  const auto restore = [&](const protocol::ParamInfo& info, std::int64_t raw) {
+    const auto settings = host::ParamRestoreFromJson(dump_of(info, raw), &why_);
+    EXPECT_TRUE(settings) << info.key << " = " << raw << ": " << why_;
+    if (!settings) {
+      host::ParamWriteOutcome none;
+      none.end = ParamWriteEnd::kNoAnswer;
+      return none;
+    }
+    return host::RestoreParams(client_, *settings, kTimeoutMs);
+  };
+  int taken = 0, refused_whole = 0, refused_beyond = 0;
+  for (const protocol::ParamInfo& info : protocol::kParams) {
+    if (info.access == protocol::ParamAccess::kReadOnly) continue;
+    const std::int32_t held = read(info);
+    const bool joint_limit = info.access == protocol::ParamAccess::kJointLimit;
+    const bool lower_is_loose = info.id == protocol::ParamId::kJointAngleMin;
+    const std::int64_t loose = lower_is_loose ? info.min_raw : info.max_raw;
+    // A supervisor limit at its tight end (1 raw step) latches its fault on a board at
+    // rest, whose sensors are not that still; the board-side vectors take those ends
+    // (param_bounds_vectors.cc). Here it is tightened to half its loose end.
+    const bool supervisor_limit = joint_limit ||
+                                  info.id == protocol::ParamId::kTorqueMax ||
+                                  info.id == protocol::ParamId::kVelocityMax;
+    const std::int64_t tight = supervisor_limit ? loose / 2
+                               : lower_is_loose ? info.max_raw
+                                                : info.min_raw;
+    // Beyond either end: the file is refused by the host...
+    for (const std::int64_t beyond : {info.min_raw - 1, info.max_raw + 1}) {
+      if (beyond < INT32_MIN || beyond > INT32_MAX) continue;  // not on the wire
+      std::string refused;
+      EXPECT_FALSE(host::ParamRestoreFromJson(dump_of(info, beyond), &refused))
+          << info.key;
+      EXPECT_NE(refused.find(" is outside "), std::string::npos) << refused;
+      // ...and by the board, when a host does not check.
+      host::ParamSetting raw{&info, static_cast<std::int32_t>(beyond), 0, true};
+      const host::ParamWriteOutcome o =
+          host::RestoreParams(client_, {&raw, 1}, kTimeoutMs);
+      EXPECT_EQ(o.end, ParamWriteEnd::kRefused)
+          << info.key << " = " << beyond << ": " << o.why;
+      const std::int64_t bound = beyond < info.min_raw ? info.min_raw : info.max_raw;
+      EXPECT_EQ(o.status, beyond < info.min_raw ? ParamStatus::kBelowMinimum
+                                                : ParamStatus::kAboveMaximum)
+          << info.key;
+      EXPECT_NE(o.why.find(": " + host::FormatParamWithUnit(
+                                      info, static_cast<std::int32_t>(bound))),
+                std::string::npos)
+          << o.why;
+      EXPECT_EQ(read(info), held) << info.key;
+      ++refused_beyond;
+    }
+    // Each end.
+    for (const std::int64_t end : {tight, loose}) {
+      const host::ParamWriteOutcome o = restore(info, end);
+      if (o.end == ParamWriteEnd::kDone) {
+        EXPECT_EQ(read(info), end) << info.key;
+        ++taken;
+      } else if (joint_limit && end == loose) {
+        // The tight end was taken: the loose one is beyond the joint's limit now.
+        EXPECT_EQ(o.end, ParamWriteEnd::kRefused) << o.why;
+        EXPECT_EQ(o.status, ParamStatus::kBeyondJointLimit) << o.why;
+        EXPECT_EQ(read(info), tight) << info.key;
+        ++refused_beyond;
+      } else {
+        EXPECT_EQ(o.end, ParamWriteEnd::kRefused)
+            << info.key << " = " << end << ": " << o.why;
+        EXPECT_EQ(o.status, ParamStatus::kOutOfRange) << info.key << ": " << o.why;
+        EXPECT_EQ(read(info), held) << info.key;
+        ++refused_whole;
+      }
+    }
+    if (!joint_limit) {
+      const host::ParamWriteOutcome back = restore(info, held);
+      EXPECT_EQ(back.end, ParamWriteEnd::kDone) << info.key << ": " << back.why;
+    }
+  }
+  // What the walk saw, so that a walk that skipped everything fails.
+  EXPECT_GE(taken, 30);
+  EXPECT_GE(refused_beyond, 40);
+  EXPECT_LE(refused_whole, 4);
+  std::printf(
+      "extremes taken %d, refused by the whole-configuration check %d, refused "
+      "beyond a bound %d\n",
+      taken, refused_whole, refused_beyond);
 }
 
 TEST_F(ParamsOnTheBus, TheBoardsCheckOfItsConfigurationNamesTheRule) {

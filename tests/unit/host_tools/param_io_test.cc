@@ -110,14 +110,19 @@ TEST(ParamValues, AValueBetweenStepsIsRoundedAndSaysWhatWillBeStored) {
 TEST(ParamValues, TheListsRangeAndAccessAreCheckedBeforeSending) {
   std::string why;
   EXPECT_FALSE(host::ParseParamAssignment("heartbeat_hz=10001", &why));
-  EXPECT_EQ(why, "heartbeat_hz: 10001 is outside 0..10000 Hz");
+  EXPECT_EQ(why, "heartbeat_hz: 10001 is outside 10..1000 Hz");
+  EXPECT_FALSE(host::ParseParamAssignment("heartbeat_hz=0", &why));
+  EXPECT_EQ(why, "heartbeat_hz: 0 is outside 10..1000 Hz");
   EXPECT_FALSE(host::ParseParamAssignment("stream_timeout_ms=0", &why));
-  EXPECT_EQ(why, "stream_timeout_ms: 0 is outside 1..60000 ms");
-  // kI32Max / 2^16 = 32767 + 65535/65536.
+  EXPECT_EQ(why, "stream_timeout_ms: 0 is outside 1..100 ms");
+  EXPECT_FALSE(host::ParseParamAssignment("host_timeout_ms=60000", &why));
+  EXPECT_EQ(why, "host_timeout_ms: 60000 is outside 200..1000 ms");
   EXPECT_FALSE(host::ParseParamAssignment("position_kp=-1", &why));
-  EXPECT_EQ(why, "position_kp: -1 is outside 0..32767.9999847412109375 1/rad");
+  EXPECT_EQ(why, "position_kp: -1 is outside 0..400 1/rad");
   EXPECT_FALSE(host::ParseParamAssignment("position_kp=1e300", &why));
-  EXPECT_EQ(why, "position_kp: 1e+300 is outside 0..32767.9999847412109375 1/rad");
+  EXPECT_EQ(why, "position_kp: 1e+300 is outside 0..400 1/rad");
+  EXPECT_FALSE(host::ParseParamAssignment("torque_max=100", &why));
+  EXPECT_EQ(why, "torque_max: 100 is outside 0.000000059604644775390625..5 N.m");
   EXPECT_FALSE(host::ParseParamAssignment("calibration_alpha=1", &why));
   EXPECT_EQ(why.rfind("calibration_alpha is read-only: ", 0), 0u) << why;
   EXPECT_NE(why.find("mjc cal upload"), std::string::npos) << why;
@@ -214,8 +219,8 @@ TEST(ParamFile, AFileIsRefusedWholeWithAReason) {
   };
   const std::vector<Case> cases = {
       {"another protocol version",
-       {{{"op", "replace"}, {"path", "/protocol_version"}, {"value", 2}}},
-       "dumped under protocol version 2, and this mjc speaks 1: its parameters may mean "
+       {{{"op", "replace"}, {"path", "/protocol_version"}, {"value", 1}}},
+       "dumped under protocol version 1, and this mjc speaks 2: its parameters may mean "
        "other things (restore it with an mjc of that version)"},
       {"no protocol version",
        {{{"op", "remove"}, {"path", "/protocol_version"}}},
@@ -232,7 +237,7 @@ TEST(ParamFile, AFileIsRefusedWholeWithAReason) {
        "(pulley ratio r_m/r_j; a calibration is uploaded whole, with mjc cal upload)"},
       {"a value out of range",
        {{{"op", "replace"}, {"path", "/params/heartbeat_hz"}, {"value", 20000}}},
-       "params.heartbeat_hz: 20000 is outside 0..10000 Hz"},
+       "params.heartbeat_hz: 20000 is outside 10..1000 Hz"},
       {"a value that is not a number",
        {{{"op", "replace"}, {"path", "/params/heartbeat_hz"}, {"value", "10"}}},
        "params.heartbeat_hz must be a number, not \"10\""},

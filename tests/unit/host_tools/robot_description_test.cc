@@ -8,9 +8,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
+
+#include "mjc/host/joint_limits.h"
 
 namespace mjc::host {
 namespace {
@@ -203,4 +206,34 @@ TEST(RobotDescription, JointZeroShiftWrapsTheCountDifference) {
 }
 
 }  // namespace
+// The description's limits as the board's joint-limit writes: rounded towards zero
+// (never looser than the file), against values computed here in double.
+TEST(JointLimits, TheDescriptionsLimitsGoToTheBoardNeverLooser) {
+  RobotDescription robot;  // −45°..90°, 1 N·m
+  robot.torque_limit_Nm = 0.7;
+  const auto settings = JointLimitSettings(robot);
+  ASSERT_EQ(settings.size(), 3u);
+  EXPECT_EQ(settings[0].info->id, protocol::ParamId::kJointTorqueLimit);
+  EXPECT_EQ(settings[0].raw, 11744051);  // floor(0.7 · 2^24 = 11744051.2)
+  EXPECT_LE(std::ldexp(settings[0].raw, -24), 0.7);
+  EXPECT_EQ(settings[1].info->id, protocol::ParamId::kJointAngleMin);
+  EXPECT_EQ(settings[1].raw, -13176794);  // −π/4 · 2^24 = −13176794.6, towards zero
+  EXPECT_EQ(settings[2].info->id, protocol::ParamId::kJointAngleMax);
+  EXPECT_EQ(settings[2].raw, 26353589);  // π/2 · 2^24 = 26353589.3
+}
+
+// A trial's amplitude against the travel the board holds: α·A on either side.
+TEST(JointLimits, AnAmplitudeBeyondTheTravelIsNamed) {
+  JointTravel travel;
+  travel.min_rad = -std::numbers::pi / 4;  // −45°
+  travel.max_rad = std::numbers::pi / 6;   // 30°
+  travel.alpha = 1.25;
+  EXPECT_EQ(TravelViolation(24.0, travel), "");  // ±30°
+  EXPECT_EQ(TravelViolation(25.0, travel),
+            "25.0° moves the joint ±31.2° (α 1.250), beyond its travel [-45.0°, 30.0°]");
+  travel.max_rad = std::numbers::pi / 2;
+  EXPECT_EQ(TravelViolation(36.0, travel), "");  // ±45°
+  EXPECT_NE(TravelViolation(36.1, travel), "");  // beyond the extension side
+}
+
 }  // namespace mjc::host

@@ -39,7 +39,9 @@ std::string FormatParamValue(const protocol::ParamInfo& info, std::int32_t raw);
 std::string FormatParamWithUnit(const protocol::ParamInfo& info, std::int32_t raw);
 // The range a write may take, in the list's units: "0..10000 Hz".
 std::string ParamRangeText(const protocol::ParamInfo& info);
-// "control" (applied by the tick, only while idle), "node" (at once), "read-only".
+// "control" (applied by the tick, only while idle), "node" (at once), "guard" (at once,
+// only while no motion runs), "joint limit" (by the tick while idle, only tightened),
+// "read-only".
 std::string_view ParamAccessName(protocol::ParamAccess access);
 
 // A write the list allows.
@@ -112,7 +114,8 @@ ParamWriteOutcome WriteParams(BoardClient& board, std::span<const ParamSetting> 
                               int timeout_ms);
 
 // A restore: the board's state first — while it runs a trial or a calibration sweep,
-// or holds a fault, it refuses control parameters, so a restore that has any is
+// or holds a fault, it refuses control parameters and protections (those of
+// protocol::RefusedWhileMoving), so a restore that has any is
 // refused whole (kNotIdle) before anything is sent. Then the settings' present values
 // are read, those the board does not already hold are written (WriteParams), and every
 // setting is read back at the end.

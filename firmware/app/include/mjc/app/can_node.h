@@ -26,17 +26,24 @@ struct CanNodeConfig {
   std::uint8_t node = 1;  // 1..8
   protocol::TelemetryRates rates;
   // Streamed setpoints older than this stop the motor (command timeout, latched),
-  // [1, 60000] ms. The default stops a motor whose host went quiet within 50.2 ms (the
-  // timeout, the main loop's poll, the next tick), under the 100 ms goal for lost
-  // commands, while a host streaming at 100 Hz may miss four setpoints.
+  // [1, 100] ms as a parameter (protocol/params.h). The default stops a motor whose host
+  // went quiet within 50.2 ms (the timeout, the main loop's poll, the next tick), under
+  // the 100 ms goal for lost commands, while a host streaming at 100 Hz may miss four
+  // setpoints.
   std::uint16_t stream_timeout_ms = 50;
   // Host supervision: a motion (calibration sweep, trial, stream) started with a
   // session id is stopped (kHostHeartbeatLost, latched) when that session's heartbeat
   // stays away this long; other sessions' heartbeats do not count, so another tool
   // cannot keep alive a motion whose commander died. A motion started without a
-  // session (0: a tool that sends no heartbeats) is not supervised. [0, 60000] ms,
-  // 0 = off; the default tolerates two lost heartbeats at the host's 10 Hz.
+  // session (0: a tool that sends no heartbeats) is not supervised. As a parameter
+  // [200, 1000] ms (protocol/params.h); 0 (off) only compiled into a test's board. The
+  // default tolerates two lost heartbeats at the host's 10 Hz.
   std::uint16_t host_timeout_ms = 300;
+  // The joint's rated SEA torque (joint_torque_limit): the control configuration's
+  // torque_max never exceeds it. The image's ceiling from a reset; a tool that knows
+  // the joint's description (mjc calibrate --robot, mjc trial --robot) sends the
+  // description's, and from then on it can only be tightened until the next reset.
+  Torque joint_torque_limit = protocol::kTorqueCeiling;
   // Largest setpoint speed while streaming, rad/s.
   AngularVelocity stream_rate = AngularVelocity::FromDouble(2.0);
   // The board's link carries CAN FD (the G474's FDCAN runs FD with bit-rate switching):
@@ -152,6 +159,11 @@ class CanNode {
   // Parameters (can_node_params.cc).
   void HandleParam(protocol::ParamId id, bool write, std::int32_t value);
   void SendParam(protocol::ParamId id, protocol::ParamStatus status);
+  // A refused write's answer: the status and the bound it names.
+  void RefuseParam(protocol::ParamId id, protocol::ParamStatus status,
+                   std::int32_t bound);
+  // A motion runs or is about to start: the protections' parameters stay as they are.
+  bool MotionRuns() const;
   // Calibration records over ISO-TP (can_node_upload.cc).
   void HandleIsoTp(const protocol::CanFrame& frame);
   void PollUpload();

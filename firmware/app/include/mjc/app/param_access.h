@@ -28,4 +28,14 @@ bool ReadParam(protocol::ParamId id, const ParamFields& fields, std::int32_t* ra
 // for a read-only field.
 bool WriteParam(protocol::ParamId id, std::int32_t raw, const ParamFields& fields);
 
+// The joint's limits the board holds (docs: protocol/params.h, kJointLimit): torque_max
+// within joint_torque_limit, and a joint limit never loosened. True, with the limit in
+// *bound, when writing `raw` to `id` would go beyond one; false for any other id.
+bool BeyondJointLimit(protocol::ParamId id, std::int32_t raw, const ParamFields& fields,
+                      std::int32_t* bound);
+
+// The control configuration's torque_max brought within joint_torque_limit (after the
+// limit was tightened).
+void KeepWithinJointLimits(const ParamFields& fields);
+
 }  // namespace mjc::app

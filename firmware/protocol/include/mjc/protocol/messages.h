@@ -145,8 +145,14 @@ enum class ParamStatus : std::uint8_t {
   kRefusedNotIdle = 3,
   kReadOnly = 4,
   kRefusedBusy = 5,  // an earlier write or calibration is still being applied: retry
+  // A write outside the bound of a protection, refused; the answer's value is the bound
+  // (the parameter keeps its value: a read tells it).
+  kBelowMinimum = 6,      // below the list's minimum (protocol/params.h)
+  kAboveMaximum = 7,      // above the list's maximum: the image's ceiling
+  kBeyondJointLimit = 8,  // looser than the joint's limit the board holds (its
+                          // description's, or the limit itself loosened: only a reset)
 };
-constexpr bool ValidEnumValue(ParamStatus s) { return static_cast<std::uint8_t>(s) <= 5; }
+constexpr bool ValidEnumValue(ParamStatus s) { return static_cast<std::uint8_t>(s) <= 8; }
 
 // Energies travel in Q7.24 J (±128 J, 0.06 µJ): a window's energy is millijoules.
 using WireEnergy = Fixed<Joule, 24>;

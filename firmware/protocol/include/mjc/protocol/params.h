@@ -25,7 +25,7 @@ namespace mjc::protocol {
 // a tool and a parameter file of different versions refuse each other instead of
 // misreading raw values. Adding a message or a parameter keeps it. The DBC's VERSION
 // line carries it.
-inline constexpr std::uint16_t kVersion = 1;
+inline constexpr std::uint16_t kVersion = 2;
 
 // The board's clock as the Heartbeat's `tick` counts it: control ticks at the board's
 // 10 kHz (ControlConfig's default; the app checks the two agree). The host measures the
@@ -57,12 +57,66 @@ enum class ParamAccess : std::uint8_t {
                   // the tick then judges the whole configuration (ControlTick::Validate)
   kReadOnly = 2,  // what the board holds: the calibration (uploaded whole over ISO-TP),
                   // the running image
+  kGuard = 3,     // the CAN node's own protective setting (a timeout, the heartbeat):
+                  // applied at once, refused while a motion runs
+  kJointLimit = 4,  // the joint's own limit, from its robot description: applied by the
+                    // tick while idle, and only ever tightened; a reset (the image's
+                    // ceiling) is the only way back to a looser one
 };
+
+// Whether a write to a parameter of this access is refused while a motion runs (a
+// calibration sweep, a trial, a stream, or a start awaiting its verdict): everything
+// that protects the wearer or the board. The telemetry rates may change mid-motion.
+constexpr bool RefusedWhileMoving(ParamAccess access) {
+  return access == ParamAccess::kGuard || access == ParamAccess::kControl ||
+         access == ParamAccess::kJointLimit;
+}
 
 namespace param_detail {
 inline constexpr std::int64_t kI32Max = std::numeric_limits<std::int32_t>::max();
 inline constexpr std::int64_t kI32Min = std::numeric_limits<std::int32_t>::min();
 }  // namespace param_detail
+
+// --- the protections' bounds --------------------------------------------------------
+// Every parameter that protects the wearer or the board has a range that keeps the
+// protection on; the board refuses a write outside it, naming the bound (ParamStatus).
+
+// The heartbeat: every tool reads the board's state and clock from it and takes a board
+// without one for 10 s as silent, so a board whose heartbeat stopped could not be
+// reached by the tool that would restart it. At least 10 Hz, the default: the tools'
+// waits assume a heartbeat within 100 ms (board_client.h, Patience). At most 1 kHz: a
+// heartbeat at the tick rate alone would take more than a 1 Mbit/s classical bus.
+inline constexpr std::int64_t kHeartbeatMinHz = 10;
+inline constexpr std::int64_t kHeartbeatMaxHz = 1000;
+// Host supervision: at least two host heartbeat periods (the tools send one every
+// 100 ms), so that one late heartbeat does not stop every motion; at most 1 s, the
+// longest a motion may run on with its commanding tool dead: half a cycle of the
+// paper's 0.5 Hz trials, where the default (300 ms) keeps `./bench`'s orphan_motion_s
+// under its 0.5 s goal.
+inline constexpr std::int64_t kHostTimeoutMinMs = 200;
+inline constexpr std::int64_t kHostTimeoutMaxMs = 1000;
+// Streamed setpoints: at most 100 ms, the goal for lost commands (a motor whose host
+// stopped streaming stops within it); at least 1 ms, a tick's resolution.
+inline constexpr std::int64_t kStreamTimeoutMinMs = 1;
+inline constexpr std::int64_t kStreamTimeoutMaxMs = 100;
+// The SEA torque ceiling compiled into the image, N·m: the largest rated torque a
+// Maestro joint's description may carry (robots/README.md, limits.torque_Nm: (0, 5]).
+// The description's own, sent by the tools (joint_torque_limit), is tighter.
+inline constexpr Torque kTorqueCeiling = Torque::FromDouble(5.0);
+// The joint angle ceiling, rad: the board's ±1.6 rad (±91.7°) joint range, which every
+// description's travel lies within (limits.extension_deg, limits.flexion_deg).
+inline constexpr Angle kJointAngleCeiling = Angle::FromDouble(1.6);
+// The joint velocity ceiling, rad/s: the supervisor's default (SupervisorConfig); the
+// paper's largest motion, 25° at 0.5 Hz, peaks at 1.4 rad/s. A lab may tighten it.
+inline constexpr AngularVelocity kVelocityCeiling = AngularVelocity::FromDouble(5.0);
+// The position loop's gains: at most ten times the gains tuned for the Maestro joint
+// (app/joint_config.h: kp 40 1/rad, ki 200 1/(rad·s), kd 0.05 s/rad, kff 0.095 s/rad):
+// room to retune a joint, while a gain typed in the wrong unit (a thousandfold) that
+// would drive the motor to its duty limit on the first count of error is refused.
+inline constexpr std::int64_t kPositionKpMaxRaw = 400 << 16;
+inline constexpr std::int64_t kPositionKiMaxRaw = 2000 << 16;
+inline constexpr std::int64_t kPositionKdMaxRaw = 32768;   // 0.5 s/rad
+inline constexpr std::int64_t kPositionKffMaxRaw = 62259;  // 0.95 s/rad, rounded down
 
 // X(Name, id, key, unit, frac_bits, min_raw, max_raw, access, what)
 // min/max bound the raw value of a write (inclusive); a read-only one's bounds are what
@@ -78,20 +132,22 @@ inline constexpr std::int64_t kI32Min = std::numeric_limits<std::int32_t>::min()
     "rate of TelemetryEnergy (0: off)")                                                  \
   X(kTelemetryControlHz, 0x0104, "telemetry_control_hz", "Hz", 0, 0, kBoardTickHz,       \
     kNode, "rate of TelemetryControl (0: off)")                                          \
-  X(kHeartbeatHz, 0x0105, "heartbeat_hz", "Hz", 0, 0, kBoardTickHz, kNode,               \
-    "rate of the Heartbeat (0: off; the tools need it)")                                 \
-  X(kStreamTimeoutMs, 0x0110, "stream_timeout_ms", "ms", 0, 1, 60000, kNode,             \
+  X(kHeartbeatHz, 0x0105, "heartbeat_hz", "Hz", 0, kHeartbeatMinHz, kHeartbeatMaxHz,     \
+    kGuard, "rate of the Heartbeat (the tools need it: it cannot be stopped)")           \
+  X(kStreamTimeoutMs, 0x0110, "stream_timeout_ms", "ms", 0, kStreamTimeoutMinMs,         \
+    kStreamTimeoutMaxMs, kGuard,                                                         \
     "streamed setpoints older than this stop the motor (fault 301)")                     \
-  X(kHostTimeoutMs, 0x0111, "host_timeout_ms", "ms", 0, 0, 60000, kNode,                 \
-    "a motion whose host session is silent this long stops (fault 302; 0: off)")         \
-  X(kPositionKp, 0x0200, "position_kp", "1/rad", 16, 0, param_detail::kI32Max, kControl, \
+  X(kHostTimeoutMs, 0x0111, "host_timeout_ms", "ms", 0, kHostTimeoutMinMs,               \
+    kHostTimeoutMaxMs, kGuard,                                                           \
+    "a motion whose host session is silent this long stops (fault 302)")                 \
+  X(kPositionKp, 0x0200, "position_kp", "1/rad", 16, 0, kPositionKpMaxRaw, kControl,     \
     "position loop: duty per rad of error")                                              \
-  X(kPositionKi, 0x0201, "position_ki", "1/(rad.s)", 16, 0, param_detail::kI32Max,       \
-    kControl, "position loop: duty per rad.s of integrated error")                       \
-  X(kPositionKd, 0x0202, "position_kd", "s/rad", 16, 0, param_detail::kI32Max, kControl, \
+  X(kPositionKi, 0x0201, "position_ki", "1/(rad.s)", 16, 0, kPositionKiMaxRaw, kControl, \
+    "position loop: duty per rad.s of integrated error")                                 \
+  X(kPositionKd, 0x0202, "position_kd", "s/rad", 16, 0, kPositionKdMaxRaw, kControl,     \
     "position loop: duty per rad/s of motor velocity")                                   \
-  X(kPositionKff, 0x0203, "position_kff", "s/rad", 16, 0, param_detail::kI32Max,         \
-    kControl, "position loop: duty per rad/s of setpoint velocity")                      \
+  X(kPositionKff, 0x0203, "position_kff", "s/rad", 16, 0, kPositionKffMaxRaw, kControl,  \
+    "position loop: duty per rad/s of setpoint velocity")                                \
   X(kVelocityWindow, 0x0210, "velocity_window", "ticks", 0,                              \
     VelocityEstimator::kMinWindow, ControlTick::kMaxVelocityWindow, kControl,            \
     "joint velocity estimator's window (odd; its delay aligns the torque)")              \
@@ -101,8 +157,20 @@ inline constexpr std::int64_t kI32Min = std::numeric_limits<std::int32_t>::min()
   X(kAttachmentPriorDamping, 0x0212, "attachment_prior_damping", "N.m.s/rad",            \
     Damping::kFracBits, 0, param_detail::kI32Max, kControl,                              \
     "attachment b the velocity model assumes until a trial's window is fitted")          \
-  X(kTorqueMax, 0x0300, "torque_max", "N.m", Torque::kFracBits, 1,                       \
-    param_detail::kI32Max, kControl, "SEA torque limit (fault 202 beyond it)")           \
+  X(kTorqueMax, 0x0300, "torque_max", "N.m", Torque::kFracBits, 1, kTorqueCeiling.raw(), \
+    kControl, "SEA torque limit (fault 202 beyond it), within joint_torque_limit")       \
+  X(kJointTorqueLimit, 0x0301, "joint_torque_limit", "N.m", Torque::kFracBits, 1,        \
+    kTorqueCeiling.raw(), kJointLimit,                                                   \
+    "the joint's rated SEA torque (its description's limits.torque_Nm): torque_max "     \
+    "never exceeds it")                                                                  \
+  X(kJointAngleMin, 0x0302, "joint_angle_min", "rad", Angle::kFracBits,                  \
+    -kJointAngleCeiling.raw(), -1, kJointLimit,                                          \
+    "the joint's extension limit (its description's limits.extension_deg; fault 200)")   \
+  X(kJointAngleMax, 0x0303, "joint_angle_max", "rad", Angle::kFracBits, 1,               \
+    kJointAngleCeiling.raw(), kJointLimit,                                               \
+    "the joint's flexion limit (its description's limits.flexion_deg; fault 200)")       \
+  X(kVelocityMax, 0x0304, "velocity_max", "rad/s", AngularVelocity::kFracBits, 1,        \
+    kVelocityCeiling.raw(), kControl, "joint velocity limit (fault 203 beyond it)")      \
   X(kCalibrationRight, 0x0400, "calibration_c_right", "rad", Angle::kFracBits,           \
     param_detail::kI32Min, param_detail::kI32Max, kReadOnly, "backlash offset c_r")      \
   X(kCalibrationLeft, 0x0401, "calibration_c_left", "rad", Angle::kFracBits,             \
@@ -188,7 +256,7 @@ consteval std::uint32_t ParamListDigest() {
 // an existing parameter means (its id, key, unit, format or range), raise kVersion;
 // then write the new digest here (the compiler's message names it: "ParamListIs()
 // [with ... kDigest = N]").
-inline constexpr std::uint32_t kParamListDigest = 493797895;
+inline constexpr std::uint32_t kParamListDigest = 3798214345;
 template <std::uint32_t kDigest>
 constexpr bool ParamListIs() {
   static_assert(kDigest == kParamListDigest,
