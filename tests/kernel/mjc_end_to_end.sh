@@ -50,7 +50,9 @@ dumplog=$!
 check "candump listens" wait_receivers $((base + 1))
 count_receivers
 base=$receivers
-"$mjc" log --iface vcan0 --seconds 4 --out "$work/bus.log" 2>"$work/log.err" &
+# It records until stopped after the calibration (not for a wall-clock time, which a
+# slow machine could spend before the sweep's angle telemetry starts).
+"$mjc" log --iface vcan0 --out "$work/bus.log" 2>"$work/log.err" &
 logger=$!
 check "mjc log listens" wait_receivers $((base + 2))
 
@@ -74,6 +76,7 @@ r=$(json_number "$work/cal/calibration.json" c_right_deg)
 l=$(json_number "$work/cal/calibration.json" c_left_deg)
 stiffness=$(json_number "$work/cal/calibration.json" sea_stiffness_Nm_per_rad)
 echo "fitted c_r ${r:-?}°, c_l ${l:-?}° (plant ${want_r:-?}°, ${want_l:-?}°)"
+kill -INT "$logger"
 check "fitted offsets within 0.05° of the plant's" \
   awk -v r="${r:-}" -v l="${l:-}" -v R="${want_r:-}" -v L="${want_l:-}" \
   'BEGIN { exit !(r != "" && R != "" && (r - R)^2 < 0.05^2 && (l - L)^2 < 0.05^2) }'

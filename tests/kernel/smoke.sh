@@ -41,7 +41,7 @@ start_candump() {  # FILE ARGS...
   shift
   count_receivers
   base=$receivers
-  timeout 20 candump "$@" "$dev" >"$file" 2>&1 &
+  timeout "${MJC_WAIT_CAP_S:-300}" candump "$@" "$dev" >"$file" 2>&1 &
   wait_receivers $((base + 1))
 }
 
@@ -87,10 +87,10 @@ check_isotp() {  # NAME LINK-LAYER-ARGS...
   payload=$(pattern 600)
   count_receivers
   base=$receivers
-  timeout 20 isotprecv "$@" -s 321 -d 123 "$dev" >"$work/c" 2>&1 &
+  timeout "${MJC_WAIT_CAP_S:-300}" isotprecv "$@" -s 321 -d 123 "$dev" >"$work/c" 2>&1 &
   local rx=$!
   wait_receivers $((base + 1)) || { report "$name" 1 "isotprecv never listened"; return; }
-  echo "$payload" | timeout 20 isotpsend "$@" -s 123 -d 321 "$dev" || st=1
+  echo "$payload" | timeout "${MJC_WAIT_CAP_S:-300}" isotpsend "$@" -s 123 -d 321 "$dev" || st=1
   wait $rx || st=1
   got=$(tr -s ' \n' ' ' <"$work/c" | sed 's/^ //; s/ $//')
   [[ $st == 0 && $got == "$payload" ]] || st=1
@@ -134,7 +134,7 @@ check_replay() {
   [[ -s $work/log ]] || { report "canplayer replays the log" 1 "no log from the previous check"; return; }
   start_candump "$work/e" -L -n "$(wc -l <"$work/log")" ||
     { report "canplayer replays the log" 1 "candump never listened"; return; }
-  timeout 20 canplayer -t -I "$work/log" || st=1
+  timeout "${MJC_WAIT_CAP_S:-300}" canplayer -t -I "$work/log" || st=1
   wait %% 2>/dev/null
   sent=$(cut -d' ' -f2- "$work/log")
   got=$(cut -d' ' -f2- "$work/e")

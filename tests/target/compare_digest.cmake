@@ -8,7 +8,7 @@ if(NOT EXISTS "${HOST_COMMAND}")
 endif()
 foreach(side HOST TARGET)
   execute_process(COMMAND ${${side}_COMMAND} OUTPUT_VARIABLE out RESULT_VARIABLE rc
-                  TIMEOUT 280)
+                  TIMEOUT 1700)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "${side} digest run failed (${rc}):\n${out}")
   endif()

@@ -16,7 +16,7 @@ function(run_case name image status pattern)
     set(loader -device loader,file=${image},addr=0x4000)
   endif()
   execute_process(COMMAND ${qemu} ${loader} RESULT_VARIABLE rc OUTPUT_VARIABLE out
-                  ERROR_VARIABLE err TIMEOUT 60)
+                  ERROR_VARIABLE err TIMEOUT 600)
   message("--- ${name}: exit ${rc}\n${out}${err}")
   math(EXPR total "${total} + 1")
   set(total ${total} PARENT_SCOPE)
