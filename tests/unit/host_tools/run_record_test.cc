@@ -120,7 +120,7 @@ TEST(RunRecord, CarriesTheRobotItsParametersAndItsProcess) {
           .value_or("");
   ASSERT_FALSE(text.empty());
   r.robot = RobotRecord("robots/maestro-default.json", text);
-  r.params = {{"velocity_window", 31}, {"attachment_prior_stiffness", 0.5}};
+  r.params = {{"velocity_window", 101}, {"attachment_prior_stiffness", 0.5}};
   r.pid = 4242;
   r.calibration->record.backlash.cable_friction = Torque::Quantize(0.125);
   const nlohmann::json j = RunRecordToJson(r);
@@ -130,7 +130,7 @@ TEST(RunRecord, CarriesTheRobotItsParametersAndItsProcess) {
   const auto read = RunRecordFromJson(j, &why);
   ASSERT_TRUE(read) << why;
   EXPECT_EQ(read->pid, 4242);
-  EXPECT_EQ(read->params["velocity_window"], 31);
+  EXPECT_EQ(read->params["velocity_window"], 101);
   EXPECT_EQ(read->calibration->record.backlash.cable_friction, Torque::Quantize(0.125));
   EXPECT_EQ(RunRecordToJson(*read), j);
   // A description the loader would refuse, a parameter the list does not have or out of

@@ -210,7 +210,7 @@ std::string Edited(const std::filesystem::path& dir, int row, const std::string&
   read << std::ifstream(dir / "windows.csv").rdbuf();
   std::string text = read.str();
   std::size_t at = 0;
-  for (int line = 0; line < row + 2; ++line) at = text.find('\n', at) + 1;
+  for (int line = 0; line < row + 1; ++line) at = text.find('\n', at) + 1;
   const std::size_t end = text.find('\n', at);
   std::string line = text.substr(at, end - at);
   const std::size_t cell = line.find(from);
