@@ -17,14 +17,7 @@ namespace {
 // file and the field. Values the board accepts but no Maestro joint has are said on
 // stderr, a line each, under `command`'s name.
 protocol::CalibrationRecord Load(const std::string& file, const char* command) {
-  std::ifstream in(file);
-  if (!in) throw Failure("cannot read " + file);
-  nlohmann::json j;
-  try {
-    in >> j;
-  } catch (const std::exception& e) {
-    throw Failure(file + " is not JSON: " + e.what());
-  }
+  const nlohmann::json j = ReadJsonObjectFile(file);
   std::string why;
   std::vector<std::string> warnings;
   const auto record = host::CalibrationFromJson(j, &why, &warnings);
@@ -69,7 +62,7 @@ void AddCal(CLI::App& app) {
   cal->require_subcommand(1);
   static std::string file, iface, out;
   static int node = 1, timeout_ms = 1000;
-  static bool json = false;
+  static bool json = false, force = false;
 
   auto* show =
       cal->add_subcommand("show", "Print a calibration file after the board's checks");
@@ -89,8 +82,12 @@ void AddCal(CLI::App& app) {
   auto* download = cal->add_subcommand("download", "Read a board's calibration back");
   AddIfaceOption(download, &iface);
   AddNodeOption(download, &node);
-  download->add_option("--out", out, "Write it to this file (default: print)");
+  download->add_option("--out", out,
+                       "Write it to this file (default: print; an existing file is "
+                       "refused without --force)");
+  download->add_flag("--force", force, "Replace the --out file if it exists");
   download->callback([] {
+    if (!out.empty()) RefuseOverwrite(out, force, "--out");
     auto link = OpenLink(iface);
     host::BoardClient board(link.get(), static_cast<std::uint8_t>(node));
     IdentifyOrThrow(board);

@@ -9,6 +9,8 @@
 // zero. Its outputs go to a new folder (calibration.json, sweep.csv, run.json), never
 // over an earlier run's.
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -17,6 +19,7 @@
 #include <ctime>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "commands.h"
@@ -44,17 +47,32 @@ using protocol::ParamId;
 // The files a calibration run writes into its folder (replaced under --force).
 const std::vector<std::string> kOutputs = {"calibration.json", "sweep.csv", "run.json"};
 
-void WriteSweep(const std::filesystem::path& path, int rate_hz,
-                const std::vector<double>& motor, const std::vector<double>& joint) {
-  std::string text = "# mjc calibrate sweep: the board's angle telemetry at " +
-                     std::to_string(rate_hz) + " Hz\nmotor_rad,joint_rad\n";
-  char line[64];
-  for (std::size_t i = 0; i < motor.size(); ++i) {
-    std::snprintf(line, sizeof line, "%.9g,%.9g\n", motor[i], joint[i]);
-    text += line;
+// sweep.csv as the samples arrive: its header at the sweep's start, then each pass's
+// samples appended at once (host::AppendFile), so a host that dies mid-sweep leaves
+// every sample it had taken.
+class SweepCsv {
+ public:
+  SweepCsv(const std::filesystem::path& path, int rate_hz) : file_(path) {
+    file_.Append("# mjc calibrate sweep: the board's angle telemetry at " +
+                 std::to_string(rate_hz) + " Hz\nmotor_rad,joint_rad\n");
   }
-  host::WriteFile(path, text);
-}
+  void Append(std::span<const host::AngleSample> samples) {
+    if (samples.empty()) return;
+    std::string text;
+    char line[64];
+    for (const host::AngleSample& a : samples) {
+      std::snprintf(line, sizeof line, "%.9g,%.9g\n", a.motor_rad, a.joint_rad);
+      text += line;
+    }
+    file_.Append(text);
+    rows_ += samples.size();
+  }
+  std::size_t rows() const { return rows_; }
+
+ private:
+  host::AppendFile file_;
+  std::size_t rows_ = 0;
+};
 
 bool SameCalibration(const CalibrationRecord& a, const CalibrationRecord& b) {
   return a.backlash == b.backlash && a.sea_stiffness == b.sea_stiffness &&
@@ -98,10 +116,13 @@ void AddCalibrate(CLI::App& app) {
   cmd->callback([] {
     // The joint's description first: a bad file moves nothing and writes nothing.
     std::optional<host::RobotDescription> robot;
+    nlohmann::json robot_record;  // its content for run.json, as read
     if (!robot_path.empty()) {
       std::string why;
       robot = host::LoadRobotDescription(robot_path, &why);
       if (!robot) throw Failure("robot description refused: " + why);
+      robot_record =
+          host::RobotRecord(robot_path, host::ReadFileText(robot_path).value_or(""));
       // The sweep turns the motor pulley ±amplitude: the joint follows at α times that.
       const double joint_deg = robot->Alpha() * amplitude_deg;
       if (joint_deg > robot->flexion_limit_deg ||
@@ -116,8 +137,14 @@ void AddCalibrate(CLI::App& app) {
       }
       std::printf("robot %s\n", host::DescribeRobot(*robot, robot_path).c_str());
     }
+    std::error_code no_folder;
+    const bool created =
+        output.out.empty() || !std::filesystem::exists(output.out, no_folder);
     const std::filesystem::path dir =
         PrepareOutputs("mjc calibrate", output, "out/calibration", kOutputs);
+    // Whether a board answered: a run that never reached one (no interface, a silent
+    // node) leaves no folder behind; once one answered, its run.json says what it said.
+    bool reached = false;
     const std::string out_path = (dir / "calibration.json").string();
     host::RunRecord run;
     run.command = "calibrate";
@@ -131,6 +158,8 @@ void AddCalibrate(CLI::App& app) {
     run.started_utc = host::UtcNow();
     run.host = host::HostName();
     run.mjc = build::kDescribe;
+    run.pid = static_cast<long>(::getpid());
+    if (robot) run.robot = robot_record;
     host::WriteRunRecord(run, dir);  // also finds an unwritable folder now
     // Every way out says how the run ended in run.json, then the Failure.
     std::optional<int> fault;
@@ -150,6 +179,7 @@ void AddCalibrate(CLI::App& app) {
       std::string why;
       // Who it is (one board, its build), in run.json before anything moves.
       IdentifyOrThrow(board);
+      reached = true;
       run.board = board.info();
 
       // What the board holds now: the new record keeps its stiffness and joint zero.
@@ -160,6 +190,11 @@ void AddCalibrate(CLI::App& app) {
             "cannot read " + who + "'s calibration in force, not sweeping: " + why);
       }
       run.calibration = *held;
+      // And the parameters that shape its estimate and the sweep's telemetry.
+      run.params = host::ReadBoardParams(board, &why);
+      if (run.params.is_null()) {
+        throw Failure(NoAnswer(board), "cannot read " + who + "'s parameters: " + why);
+      }
       host::WriteRunRecord(run, dir);
       // The joint's own torque and travel limits, before anything moves: the board's
       // supervisor stops the sweep at them, and its torque_max stays within the
@@ -183,6 +218,9 @@ void AddCalibrate(CLI::App& app) {
                       "'s angle telemetry is off (TelemetryAnglesHz 0): nothing to fit");
       }
 
+      // Created before the sweep is started, so an unwritable file moves nothing.
+      const std::filesystem::path sweep_path = dir / "sweep.csv";
+      SweepCsv sweep_csv(sweep_path, static_cast<int>(*rate_hz));
       protocol::SweepConfig sweep;
       sweep.end_amplitude = Angle::Quantize(host::DegToRad(amplitude_deg));
       sweep.frequency_mHz = static_cast<std::uint16_t>(std::lround(frequency_hz * 1000));
@@ -225,12 +263,22 @@ void AddCalibrate(CLI::App& app) {
             char line[96];
             std::snprintf(line, sizeof line, "[sweep] cycle %d/%d (%.1f s of %.1f s)",
                           cycle, cycles, in_s, expected_s);
-            Progress(line);
+            Progress(line, "cycle " + std::to_string(cycle));
           }
         }
       };
-      const host::SweepSamples samples =
-          host::RecordSweep(board, expected_s, show_progress, &why);
+      // A pass whose samples cannot be written (a full disk) does not stop the motion
+      // halfway; the sweep ends, then the run, with the reason.
+      std::string write_error;
+      const auto take = [&](std::span<const host::AngleSample> taken) {
+        try {
+          if (write_error.empty()) sweep_csv.Append(taken);
+        } catch (const std::exception& e) {
+          write_error = e.what();
+        }
+        show_progress();
+      };
+      const host::SweepSamples samples = host::RecordSweep(board, expected_s, take, &why);
       EndProgress();
       const std::vector<double>& motor = samples.motor_rad;
       const std::vector<double>& joint = samples.joint_rad;
@@ -245,14 +293,18 @@ void AddCalibrate(CLI::App& app) {
               ? StopMotion(board)
               : "";
       board.ReleaseMotion();  // the sweep is over
-      // Never a record of a motion that is not the one this session started.
+      // Never a record of a motion that is not the one this session started: no sample
+      // is appended before the board names this session's sweep, so the file holds
+      // none; it goes.
       if (wrong) {
+        std::error_code ignored;
+        std::filesystem::remove(sweep_path, ignored);
         throw Failure(Exit::kRefused, why + "; " + stopped + "; nothing recorded");
       }
-      const std::filesystem::path sweep_path = dir / "sweep.csv";
-      WriteSweep(sweep_path, *rate_hz, motor, joint);
-      const std::string kept = "; " + std::to_string(motor.size()) +
-                               " sweep samples saved to " + sweep_path.string();
+      const std::string kept =
+          "; " + std::to_string(sweep_csv.rows()) + " sweep samples saved to " +
+          sweep_path.string() +
+          (write_error.empty() ? "" : " (" + write_error + ": later samples not saved)");
       if (stopped_by_estop()) {
         estop_said = true;
         throw Failure(Exit::kStopped,
@@ -285,6 +337,7 @@ void AddCalibrate(CLI::App& app) {
                                           host::DescribeFault(board.status().fault) +
                                           kept);
       }
+      if (!write_error.empty()) throw Failure("the sweep ran, but " + write_error + kept);
       // A lost sample shifts every later one in time: the lag fit would read it as lag.
       const std::uint64_t dropped = link->stats().rx_dropped - dropped_before;
       const std::uint64_t malformed = samples.malformed;
@@ -368,10 +421,14 @@ void AddCalibrate(CLI::App& app) {
       }
       run.end = {OutcomeOf(f.exit()), fault, f.what()};
       host::WriteRunRecord(run, dir);
+      if (!reached && f.exit() != Exit::kAmbiguous) {
+        host::DiscardUnstartedRun(dir, kOutputs, created);
+      }
       throw;
     } catch (const std::exception& e) {
       run.end = {"failed", std::nullopt, e.what()};
       host::WriteRunRecord(run, dir);
+      if (!reached) host::DiscardUnstartedRun(dir, kOutputs, created);
       throw;
     }
     run.end.outcome = "completed";

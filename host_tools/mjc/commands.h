@@ -5,6 +5,7 @@
 #pragma once
 
 #include <signal.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <atomic>
@@ -24,8 +25,10 @@
 #include "mjc/host/can_link.h"
 #include "mjc/host/config.h"
 #include "mjc/host/emergency_stop.h"
+#include "mjc/host/report.h"
 #include "mjc/host/run_record.h"
 #include "mjc/protocol/can_frame.h"
+#include "mjc/strict_json.h"
 
 namespace mjc::cli {
 
@@ -186,6 +189,33 @@ inline std::filesystem::path PrepareOutputs(const char* tool,
   return folder.path;
 }
 
+// An output file a command would replace (mjc param dump -o, mjc cal download --out):
+// refused before anything is asked of a board unless --force, as a run's folder is
+// (host::PrepareOutputFolder). A folder is refused even with --force.
+inline void RefuseOverwrite(const std::string& path, bool force, const char* option) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    throw Failure(path + " is a folder: give " + option + " a file name");
+  }
+  if (!force && std::filesystem::exists(path, error)) {
+    throw Failure(path +
+                  " exists: nothing is replaced without --force (or choose another " +
+                  option + ")");
+  }
+}
+
+// The JSON object in the file at `path`, read strictly (mjc/strict_json.h: a key given
+// twice or anything after the object refused); throws Failure naming the file.
+inline nlohmann::json ReadJsonObjectFile(const std::string& path) {
+  const auto text = host::ReadFileText(path);
+  if (!text) throw Failure("cannot read " + path);
+  try {
+    return strict::ParseObject<nlohmann::json>(*text, path);
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+}
+
 // The raw CAN link on `iface`; throws Failure naming the interface when it cannot open.
 inline std::unique_ptr<host::SocketCanLink> OpenLink(const std::string& iface) {
   std::string why;
@@ -197,15 +227,28 @@ inline std::unique_ptr<host::SocketCanLink> OpenLink(const std::string& iface) {
 // Has `board`'s waits say on stderr, the moment they see it, that `iface`'s controller
 // reported bus-off: frames are lost until it recovers, and a board on a failing bus
 // stops with kCanBusOff (the tool then reports the fault itself).
-// A progress line on stderr, rewritten in place ("\r"), and its end: a message that
-// follows starts on a line of its own, with no empty line when none was open.
+// A progress line on stderr and its end: on a terminal, one line rewritten in place
+// ("\r"), and a message that follows starts on a line of its own (no empty line when
+// none was open); into a file or a pipe, plain lines, one each time `milestone` changes
+// (the line itself by default: a line whose only change is a running clock is not
+// repeated into a log). A stderr that is closed (a pipe whose reader went) loses the
+// line and nothing else: SIGPIPE is ignored (main) and the EPIPE is not an error here.
 inline bool& ProgressOpen() {
   static bool open = false;
   return open;
 }
-inline void Progress(const std::string& line) {
-  std::fprintf(stderr, "\r%s   ", line.c_str());
-  ProgressOpen() = true;
+inline void Progress(const std::string& line, const std::string& milestone = "") {
+  static const bool terminal = ::isatty(STDERR_FILENO) == 1;
+  if (terminal) {
+    std::fprintf(stderr, "\r%s   ", line.c_str());
+    ProgressOpen() = true;
+    return;
+  }
+  static std::string last;
+  const std::string& now = milestone.empty() ? line : milestone;
+  if (now == last) return;
+  last = now;
+  std::fprintf(stderr, "%s\n", line.c_str());
 }
 inline void EndProgress() {
   if (ProgressOpen()) std::fputc('\n', stderr);
@@ -255,15 +298,20 @@ inline void OnStopSignal(int) { g_stop = true; }
 // (the emergency-stop watch).
 inline std::atomic<bool>& StopFlag() { return detail::g_stop; }
 
-// Makes SIGINT, SIGTERM and SIGHUP (Ctrl-C, kill, a closed terminal) end a
-// long-running command cleanly — a motion it started stopped, files flushed, counts
-// printed: the returned flag turns true when one arrives. Without SA_RESTART, so a
-// blocking read (a prompt) returns at once.
+// The signals that ask a command to end (Ctrl-C, kill, a closed terminal, Ctrl-\\).
+inline constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+
+// Makes SIGINT, SIGTERM, SIGHUP and SIGQUIT end a long-running command cleanly — a
+// motion it started stopped, what arrived kept, counts printed, exit 6 — where their
+// default would kill it mid-motion (SIGQUIT with a core dump, exit 131): the returned
+// flag turns true when one arrives. Without SA_RESTART, so a blocking read (a prompt)
+// returns at once. (SIGKILL cannot be caught: the board stops by itself when the
+// heartbeat stays away, and every record is already in the files.)
 inline const std::atomic<bool>& StopOnSignals() {
   struct sigaction action = {};
   action.sa_handler = detail::OnStopSignal;
   sigemptyset(&action.sa_mask);
-  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) sigaction(signal, &action, nullptr);
+  for (const int signal : kStopSignals) sigaction(signal, &action, nullptr);
   return detail::g_stop;
 }
 

@@ -3,6 +3,7 @@
 // interfaces, silent nodes) is one line on stderr, "mjc <subcommand>: <what>", and a
 // non-zero exit status (commands.h: Exit).
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -59,10 +60,49 @@ std::string UnknownCommand(CLI::App& app, int argc, char** argv) {
   return "";
 }
 
+// For "The following argument was not expected: --nod": " (did you mean '--node'?)"
+// for each word that is an option misspelt, from the options of the command the line
+// chose (as a misspelt subcommand gets one); empty when none is near.
+std::string FlagHint(const CLI::App& app, const std::string& what) {
+  const CLI::App* leaf = &app;
+  while (!leaf->get_subcommands().empty()) leaf = leaf->get_subcommands().front();
+  std::vector<std::string> names;
+  for (const CLI::App* a = leaf; a != nullptr; a = a->get_parent()) {
+    for (const CLI::Option* o : a->get_options()) {
+      for (const std::string& n : o->get_lnames()) names.push_back("--" + n);
+      for (const std::string& n : o->get_snames()) names.push_back("-" + n);
+    }
+  }
+  const std::vector<std::string_view> known(names.begin(), names.end());
+  std::string hint;
+  const std::size_t colon = what.find(": ");
+  if (colon == std::string::npos) return "";
+  std::string word;
+  for (std::size_t i = colon + 2; i <= what.size(); ++i) {
+    if (i < what.size() && what[i] != ' ') {
+      word += what[i];
+      continue;
+    }
+    // "--nod=3": the name before '='.
+    const std::string name = word.substr(0, word.find('='));
+    if (name.starts_with("-")) {
+      if (const auto near = mjc::strict::Closest(name, known)) {
+        hint += " (did you mean '" + std::string(*near) + "'?)";
+      }
+    }
+    word.clear();
+  }
+  return hint;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   using mjc::cli::Exit;
+  // A closed stdout or stderr (`mjc trial 2>&1 | head`) is an error on a write, never
+  // the death of the process mid-motion: a progress line is lost (EPIPE), a report
+  // that could not be written is said with exit 1 below.
+  std::signal(SIGPIPE, SIG_IGN);
   CLI::App app{"mjc: host tool for the Maestro exoskeleton's joint boards (SocketCAN)"};
   // The defaults come first: the subcommands' options start from them. A config file
   // that cannot be used stops every command but --help and --version.
@@ -87,6 +127,7 @@ int main(int argc, char** argv) {
         what.find("subcommand") != std::string::npos) {
       what = "a command is required";
     }
+    if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) what += FlagHint(*a, what);
     return CommandName(*a) + ": " + what + " (see " + CommandName(*a) + " --help)\n";
   });
   mjc::cli::AddSim(app);

@@ -8,8 +8,10 @@
 // supervises: each node gets the host's heartbeat, so a motion still running when the
 // monitor stops or dies is stopped by the board (kHostHeartbeatLost).
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -139,7 +141,10 @@ void AddMonitor(CLI::App& app) {
           }
           if (const auto& info = b.info()) {
             j["build"] = host::BuildName(info->build, info->dirty);
-            j["instance"] = info->instance;
+            // Four lower-case hex digits, as mjc list --json and run.json write it.
+            char instance[8];
+            std::snprintf(instance, sizeof instance, "%04x", info->instance);
+            j["instance"] = instance;
           }
           std::printf("%s\n", j.dump().c_str());
           continue;
@@ -188,7 +193,11 @@ void AddMonitor(CLI::App& app) {
                       bus.bus_off > 0 ? " (BUS-OFF)" : "");
         }
       }
-      std::fflush(stdout);
+      // A closed stdout (`mjc monitor | head`: SIGPIPE is ignored) ends the monitor as a
+      // failure to write, not a loop writing into nothing.
+      if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+        throw Failure(std::string("error writing stdout: ") + std::strerror(errno));
+      }
       if (seconds > 0 && now - start >= std::chrono::duration<double>(seconds)) break;
     }
     std::string failures;

@@ -157,11 +157,16 @@ void AddSet(CLI::App* param) {
 void AddDump(CLI::App* param) {
   static ParamOptions options;
   static std::string out;
+  static bool force = false;
   auto* cmd = param->add_subcommand(
       "dump", "Every parameter of a board to a JSON file (what mjc param restore reads)");
   AddBoardOptions(cmd, &options);
-  cmd->add_option("-o,--out", out, "Write it to this file (default: print)");
+  cmd->add_option("-o,--out", out,
+                  "Write it to this file (default: print; an existing file is refused "
+                  "without --force)");
+  cmd->add_flag("--force", force, "Replace the -o file if it exists");
   cmd->callback([] {
+    if (!out.empty()) RefuseOverwrite(out, force, "-o");
     ParamBoard board(options, "mjc param dump");
     std::string why;
     const auto all = host::AllParams();
@@ -190,13 +195,11 @@ void AddRestore(CLI::App* param) {
   AddBoardOptions(cmd, &options);
   cmd->add_option("file", file, "A file mjc param dump wrote")->required();
   cmd->callback([] {
-    std::ifstream in(file);
-    if (!in) throw Failure("cannot read " + file);
     nlohmann::json j;
     try {
-      j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-      throw Failure(file + " is not JSON: " + e.what() + "; nothing was sent");
+      j = ReadJsonObjectFile(file);
+    } catch (const Failure& e) {
+      throw Failure(std::string(e.what()) + "; nothing was sent");
     }
     std::string why;
     const auto settings = host::ParamRestoreFromJson(j, &why);

@@ -52,7 +52,47 @@ void AddReport(CLI::App& app) {
                (run->subject ? ", subject " + *run->subject : "") + "; " + run->protocol +
                " protocol, started " + run->started_utc + " on " + run->host + " (mjc " +
                run->mjc + ").\n";
-      if (run->end.outcome != "completed") {
+      // What windows.csv holds must be what run.json planned: a file copied from
+      // another run, or edited, is refused naming the trial.
+      for (std::size_t t = 0; t < trials->size(); ++t) {
+        const host::TrialWindows& got = (*trials)[t];
+        const std::string trial = "windows.csv's trial " + std::to_string(t + 1);
+        if (t >= run->amplitudes_deg.size()) {
+          throw Failure(dir + ": " + trial + " is beyond the " +
+                        std::to_string(run->amplitudes_deg.size()) +
+                        " trials run.json planned");
+        }
+        // Both files write %.9g of the same double.
+        if (host::CsvTable::Number(got.amplitude_deg) !=
+            host::CsvTable::Number(run->amplitudes_deg[t])) {
+          throw Failure(dir + ": " + trial + " ran at " +
+                        host::CsvTable::Number(got.amplitude_deg) +
+                        "°, but run.json says " +
+                        host::CsvTable::Number(run->amplitudes_deg[t]) + "°");
+        }
+        if (got.repetitions != run->repetitions) {
+          throw Failure(dir + ": " + trial + " has " + std::to_string(got.repetitions) +
+                        " repetitions, but run.json says " +
+                        std::to_string(run->repetitions));
+        }
+      }
+      std::size_t windows = 0;
+      for (const host::TrialWindows& t : *trials) windows += t.windows.size();
+      if (run->end.outcome == "running" && host::RunStillGoing(*run)) {
+        header += "The run is still going (pid " + std::to_string(*run->pid) +
+                  "): the tables hold the " + std::to_string(windows) +
+                  " windows so far.\n";
+      } else if (run->end.outcome == "running") {
+        // run.json was never told how the run ended: the process died (SIGKILL, a
+        // crash, a power cut) with every window it had received in windows.csv.
+        const std::string stopped =
+            "the host stopped after " + std::to_string(windows) +
+            " windows without a word (killed, crashed or powered off): run.json still "
+            "says \"running\"";
+        header +=
+            "The run did not complete: " + stopped + "; the tables hold what arrived.\n";
+        std::fprintf(stderr, "mjc report: %s\n", stopped.c_str());
+      } else if (run->end.outcome != "completed") {
         header += "The run did not complete: " + run->end.outcome +
                   (run->end.message.empty() ? "" : " (" + run->end.message + ")") +
                   "; the tables hold what arrived.\n";

@@ -2,9 +2,12 @@
 // trials of five repetitions at one amplitude (--pause waits for Enter between trials,
 // to re-don); "amplitude": five repetitions at each amplitude. The board estimates and
 // integrates; this reports the middle three flexions of every trial: tables on stdout,
-// every window in windows.csv (rewritten after each trial, so a later failure loses
-// nothing), run.json (the board, its calibration, the protocol, how the run ended) and
-// a figure (gnuplot) in a new output folder.
+// every window in windows.csv (appended the moment it arrives, so a host that dies
+// loses at most the window in flight), run.json (the board, its calibration, the
+// protocol, how the run ended; rewritten whole at each change) and a figure (gnuplot)
+// in a new output folder.
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -114,12 +117,25 @@ void AddTrial(CLI::App& app) {
       robot = host::LoadRobotDescription(robot_path, &why);
       if (!robot) throw Failure("robot description refused: " + why);
     }
+    std::error_code no_folder;
+    const bool created =
+        output.out.empty() || !std::filesystem::exists(output.out, no_folder);
     const std::filesystem::path dir =
         PrepareOutputs("mjc trial", output, "out/trial", kTrialOutputs);
+    // Whether a board answered: a run that never reached one (no interface, a silent
+    // node) leaves no folder behind; once one answered, its run.json says what it said.
+    bool reached = false;
     const std::string saved = (dir / "windows.csv").string();
-    // Written first: an unwritable folder is found before the trials run.
+    // Created first: an unwritable folder is found before the trials run. Each window
+    // is appended as it arrives; `runs` keeps them for the tables.
+    std::optional<host::WindowsCsvWriter> csv;
+    try {
+      csv.emplace(dir);
+    } catch (const std::exception& e) {
+      throw Failure(e.what());
+    }
     std::vector<host::TrialWindows> runs;
-    host::WriteWindowsCsv(runs, dir);
+    std::string write_error;  // the first window that could not be appended
     const bool repeatability = protocol_name == "repeatability";
     const std::vector<double> plan =
         repeatability
@@ -138,6 +154,7 @@ void AddTrial(CLI::App& app) {
     record.started_utc = host::UtcNow();
     record.host = host::HostName();
     record.mjc = build::kDescribe;
+    record.pid = static_cast<long>(::getpid());
     host::WriteRunRecord(record, dir);
     // Every way out of here says how the run ended in run.json, then the Failure.
     const auto end = [&](Exit exit, const std::string& what,
@@ -147,6 +164,9 @@ void AddTrial(CLI::App& app) {
       record.end.message = what;
       record.end.fault_code = fault;
       host::WriteRunRecord(record, dir);
+      if (!reached && exit != Exit::kAmbiguous) {
+        host::DiscardUnstartedRun(dir, kTrialOutputs, created);
+      }
       return Failure(exit, what);
     };
     // The trigger line: low (rest) from the start, back to low however the run ends.
@@ -169,6 +189,7 @@ void AddTrial(CLI::App& app) {
       record.end.outcome = "emergency_stop";
       record.end.message = what;
       host::WriteRunRecord(record, dir);
+      if (!reached) host::DiscardUnstartedRun(dir, kTrialOutputs, created);
       return Failure(Exit::kStopped, what);
     };
     try {
@@ -203,11 +224,17 @@ void AddTrial(CLI::App& app) {
       // Who it is (one board, its build) and the calibration it runs on, in run.json
       // before anything moves.
       IdentifyOrThrow(board);
+      reached = true;
       record.board = board.info();
       std::string why;
       const auto held = host::ReadCalibration(board, &why);
       if (!held) throw Failure(NoAnswer(board), "cannot read its calibration: " + why);
       record.calibration = *held;
+      // And the parameters that shape its estimate (all of them: the list is short).
+      record.params = host::ReadBoardParams(board, &why);
+      if (record.params.is_null()) {
+        throw Failure(NoAnswer(board), "cannot read its parameters: " + why);
+      }
       host::WriteRunRecord(record, dir);
       // The joint's limits (the description's, sent first), and every amplitude of
       // the plan within the joint's travel the board holds, before anything moves.
@@ -266,8 +293,19 @@ void AddTrial(CLI::App& app) {
               Progress(std::string(label) + " repetition " +
                        std::to_string(w.repetition + 1) + "/" + std::to_string(reps) +
                        (w.motion == Motion::kFlexion ? " flexion" : " extension"));
+              // A window that cannot be written (a full disk) does not stop the
+              // finger's motion halfway: the trial ends, then the run, with the reason.
+              try {
+                if (write_error.empty()) {
+                  csv->Append(t, plan[t], static_cast<std::uint16_t>(reps), w);
+                }
+              } catch (const std::exception& e) {
+                write_error = e.what();
+              }
             });
         EndProgress();
+        const std::string unwritten =
+            write_error.empty() ? "" : " (" + write_error + ": later windows not saved)";
         if (!trial.completed) {
           // The motor first: a file can wait, a finger should not. Two boards answering
           // for the node may both be moving: both are told. An emergency stop has told
@@ -277,14 +315,10 @@ void AddTrial(CLI::App& app) {
                                       trial.end == host::TrialEnd::kAmbiguous ||
                                       trial.end == host::TrialEnd::kWrongConfig);
           const std::string stopped = stop ? StopMotion(board) : "";
-          // What arrived is kept, the interrupted trial's windows included.
-          if (!trial.windows.empty()) {
-            runs.push_back({plan[t], static_cast<std::uint16_t>(reps), trial.windows});
-            host::WriteWindowsCsv(runs, dir);
-          }
-          std::size_t windows = 0;
-          for (const host::TrialWindows& r : runs) windows += r.windows.size();
-          const std::string kept = std::to_string(windows) + " windows saved to " + saved;
+          // What arrived is in windows.csv already, the interrupted trial's windows
+          // included.
+          const std::string kept =
+              std::to_string(csv->rows()) + " windows saved to " + saved + unwritten;
           if (stopped_by_estop()) {
             throw estop_end(ConfirmEmergencyStop(board, *estop) + "; " + kept);
           }
@@ -322,7 +356,12 @@ void AddTrial(CLI::App& app) {
                                               broken_before));
         }
         runs.push_back({plan[t], static_cast<std::uint16_t>(reps), trial.windows});
-        host::WriteWindowsCsv(runs, dir);
+        if (!write_error.empty()) {
+          throw end(Exit::kFailure, "trial " + std::to_string(t + 1) + "/" +
+                                        std::to_string(plan.size()) + " ran, but " +
+                                        write_error + "; " + std::to_string(csv->rows()) +
+                                        " windows saved to " + saved);
+        }
       }
     } catch (const Failure& f) {
       // Stopped before the first trial moved (the button pressed at the start, or while

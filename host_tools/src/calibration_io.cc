@@ -18,7 +18,13 @@ namespace mjc::host {
 namespace {
 
 // What a Maestro joint plausibly has (see CalibrationFromJson).
-constexpr double kPlausibleOffsetDeg = 10;
+// The backlash a Maestro joint plausibly has, each side: more than two counts of its
+// 14-bit joint encoder (360°·2/16384 = 0.044°; less is below what a sweep resolves,
+// and is what radians typed into a degree field look like: the paper's 1.1° is 0.0192
+// rad) and at most 20° (a cable's slack is a few degrees; more is degrees of a radian
+// slip, or a slack no finger should be driven through).
+constexpr double kPlausibleOffsetDeg = 20;
+constexpr double kLeastOffsetDeg = 2 * 360.0 / 16384;
 
 }  // namespace
 
@@ -128,6 +134,13 @@ std::optional<protocol::CalibrationRecord> CalibrationFromJson(
                       "cable's slack is a few degrees (the paper's joint: +1.1°/-0.9°); "
                       "radians written as degrees? (the board accepts up to ±28.6°)",
                       key, value, kPlausibleOffsetDeg);
+        warnings->push_back(line);
+      } else if (std::abs(value) < kLeastOffsetDeg) {
+        std::snprintf(line, sizeof line,
+                      "calibration: %s = %g° is below two counts of the 14-bit joint "
+                      "encoder (%.3f°), less slack than a sweep can resolve: radians "
+                      "written in a degree field? (%g rad is %.2f°)",
+                      key, value, kLeastOffsetDeg, value, RadToDeg(value));
         warnings->push_back(line);
       }
     }
@@ -301,17 +314,19 @@ UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
 }
 
 SweepSamples RecordSweep(BoardClient& board, double length_s,
-                         const std::function<void()>& each, std::string* why) {
+                         const std::function<void(std::span<const AngleSample>)>& each,
+                         std::string* why) {
   SweepSamples out;
   const std::uint64_t malformed_before = board.malformed();
   board.TakeAngles();  // samples kept earlier, if any, are not this sweep's
   board.KeepAngles(true);
   const auto take_samples = [&] {
-    for (const AngleSample& a : board.TakeAngles()) {
+    const auto taken = board.TakeAngles();
+    for (const AngleSample& a : taken) {
       out.motor_rad.push_back(a.motor_rad);
       out.joint_rad.push_back(a.joint_rad);
     }
-    if (each) each();
+    if (each) each(taken);
   };
   const Patience patience{
       std::chrono::milliseconds(static_cast<long>(2000 * length_s) + 2000)};

@@ -6,6 +6,7 @@
 #include <linux/can/isotp.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
+#include <net/if_arp.h>
 #include <poll.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
@@ -16,7 +17,9 @@
 #include <cerrno>
 #include <chrono>
 #include <cstddef>
+#include <cstdio>
 #include <cstring>
+#include <string>
 #include <thread>
 
 namespace mjc::host {
@@ -40,10 +43,38 @@ bool WaitFor(int fd, short events, int timeout_ms, bool* error) {
   }
 }
 
+// What `interface` is when it is not CAN, from its ARPHRD type in sysfs ("a loopback
+// device", "an Ethernet device", "a network device of type 772"); empty when it is CAN
+// (ARPHRD_CAN, 280) or its type cannot be read.
+std::string InterfaceKind(const std::string& interface) {
+  std::FILE* f = std::fopen(("/sys/class/net/" + interface + "/type").c_str(), "r");
+  if (f == nullptr) return "";
+  int type = -1;
+  const bool read = std::fscanf(f, "%d", &type) == 1;
+  std::fclose(f);
+  if (!read || type == ARPHRD_CAN) return "";
+  switch (type) {
+    case ARPHRD_LOOPBACK:
+      return "a loopback device";
+    case ARPHRD_ETHER:
+      return "an Ethernet device";
+    default:
+      return "a network device of type " + std::to_string(type);
+  }
+}
+
 int OpenSocket(int type, int protocol, const std::string& interface, std::string* why,
                unsigned* index) {
   if (interface.empty() || interface.size() >= IFNAMSIZ) {
     Say(why, "'" + interface + "' is not an interface name");
+    return -1;
+  }
+  // An interface of another kind (lo, eth0) would be refused by bind() with "No such
+  // device", which reads as if it were missing: its type says what it is.
+  if (const std::string kind = InterfaceKind(interface); !kind.empty()) {
+    Say(why, "'" + interface + "' is not a CAN interface (it is " + kind +
+                 "): give a CAN one, e.g. can0 or vcan0 (ip -br link show type can; "
+                 "ip -br link show type vcan)");
     return -1;
   }
   const int fd = ::socket(PF_CAN, type | SOCK_NONBLOCK | SOCK_CLOEXEC, protocol);

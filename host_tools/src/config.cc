@@ -28,13 +28,9 @@ std::optional<ToolConfig> ParseToolConfig(std::string_view text, std::string_vie
   const std::string where(source);
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    *why = where + ": not valid JSON: " + e.what();
-    return std::nullopt;
-  }
-  if (!j.is_object()) {
-    *why = where + ": the top level must be an object";
+    j = strict::ParseObject<nlohmann::json>(text, where);  // no key twice
+  } catch (const std::exception& e) {
+    *why = e.what();
     return std::nullopt;
   }
   if (const auto unknown = strict::UnknownKey(j, kConfigKeys)) {

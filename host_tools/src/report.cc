@@ -1,6 +1,8 @@
 #include "mjc/host/report.h"
 
+#include <fcntl.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -84,6 +86,56 @@ void WriteFile(const std::filesystem::path& path, std::string_view text) {
     fail("error writing");
   }
   if (std::fclose(f) != 0) fail("error writing");  // buffered data meets the disk here
+}
+
+std::optional<std::string> ReadFileText(const std::filesystem::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return std::nullopt;
+  std::string text;
+  char buffer[8192];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, f)) > 0;) {
+    text.append(buffer, n);
+  }
+  const bool failed = std::ferror(f) != 0;
+  std::fclose(f);
+  if (failed) return std::nullopt;
+  return text;
+}
+
+void ReplaceFile(const std::filesystem::path& path, std::string_view text) {
+  std::filesystem::path temporary = path;
+  temporary += ".tmp";
+  WriteFile(temporary, text);
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
+  if (error) {
+    throw std::runtime_error("cannot replace " + path.string() + ": " + error.message());
+  }
+}
+
+AppendFile::AppendFile(std::filesystem::path path) : path_(std::move(path)) {
+  fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0666);
+  if (fd_ < 0) {
+    throw std::runtime_error("cannot write " + path_.string() + ": " +
+                             std::strerror(errno));
+  }
+}
+
+AppendFile::~AppendFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void AppendFile::Append(std::string_view text) {
+  while (!text.empty()) {
+    const ssize_t n = ::write(fd_, text.data(), text.size());
+    if (n < 0 && errno == EINTR)
+      continue;  // a signal (Ctrl-C) before anything was written
+    if (n <= 0) {
+      throw std::runtime_error("error writing " + path_.string() + ": " +
+                               (n < 0 ? std::strerror(errno) : "nothing written"));
+    }
+    text.remove_prefix(static_cast<std::size_t>(n));
+  }
 }
 
 bool RunGnuplot(const std::filesystem::path& script, std::string* why) {

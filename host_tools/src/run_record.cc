@@ -3,31 +3,52 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <ctime>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 
 #include "mjc/host/describe.h"
+#include "mjc/host/param_io.h"
 #include "mjc/host/report.h"
+#include "mjc/host/robot_description.h"
 #include "mjc/host/units.h"
 #include "mjc/strict_json.h"
 
 namespace mjc::host {
 namespace {
 
-constexpr std::string_view kFormat = "mjc run 1";
-constexpr std::string_view kKeys[] = {
+// Version 2 added the run's pid, the board's parameters, the robot description's
+// content and the cable friction in force; version 1 files are read too.
+constexpr std::string_view kFormat = "mjc run 2";
+constexpr std::string_view kFormatV1 = "mjc run 1";
+constexpr std::string_view kKeysV1[] = {
     "format",       "command",     "node",    "iface",       "board",
     "calibration",  "robot",       "subject", "protocol",    "amplitudes_deg",
     "frequency_hz", "repetitions", "rest_s",  "started_utc", "host",
     "mjc",          "end"};
+constexpr std::string_view kKeys[] = {
+    "format",       "command",     "node",    "iface",       "board",
+    "calibration",  "robot",       "subject", "protocol",    "amplitudes_deg",
+    "frequency_hz", "repetitions", "rest_s",  "started_utc", "host",
+    "mjc",          "end",         "pid",     "params"};
+constexpr std::string_view kCommands[] = {"trial", "calibrate"};
+constexpr std::string_view kProtocols[] = {"repeatability", "amplitude",
+                                           "calibration sweep"};
+constexpr std::string_view kRobotKeys[] = {"path", "description"};
 constexpr std::string_view kBoardKeys[] = {"build", "dirty", "image", "reset_cause",
                                            "instance"};
-constexpr std::string_view kHeldKeys[] = {
+constexpr std::string_view kHeldKeysV1[] = {
     "calibrated",      "c_right_deg", "c_left_deg", "alpha", "sea_stiffness_Nm_per_rad",
     "joint_zero_count"};
-constexpr std::string_view kEndKeys[] = {"outcome", "fault", "message"};
-constexpr std::string_view kFaultKeys[] = {"code", "name"};
+constexpr std::string_view kHeldKeys[] = {"calibrated",
+                                          "c_right_deg",
+                                          "c_left_deg",
+                                          "alpha",
+                                          "sea_stiffness_Nm_per_rad",
+                                          "joint_zero_count",
+                                          "cable_friction_Nm"};
 
 std::string Hex(std::uint32_t v, int digits) {
   char out[16];
@@ -36,6 +57,38 @@ std::string Hex(std::uint32_t v, int digits) {
 }
 
 using Reader = strict::FieldReader<nlohmann::json>;
+
+// One of `known`, or a failure naming them.
+std::string OneOf(const Reader& in, const nlohmann::json& object, std::string_view prefix,
+                  std::string_view key, std::span<const std::string_view> known) {
+  const std::string text = in.String(object, prefix, key);
+  if (std::find(known.begin(), known.end(), text) != known.end()) return text;
+  std::string names;
+  for (const std::string_view k : known) {
+    names += (names.empty() ? "" : ", ") + std::string("\"") + std::string(k) + "\"";
+  }
+  in.Fail(
+      strict::FieldName(prefix, key),
+      "\"" + text + "\" is none of " + names +
+          (strict::Closest(text, known)
+               ? " (did you mean \"" + std::string(*strict::Closest(text, known)) + "\"?)"
+               : ""));
+}
+
+// A finite number within [lo, hi] (`unit` after the range in the message).
+double NumberIn(const Reader& in, const nlohmann::json& object, std::string_view prefix,
+                std::string_view key, double lo, double hi, const std::string& unit) {
+  const double v = in.Double(object, prefix, key);
+  if (!std::isfinite(v) || v < lo || v > hi) {
+    char text[96];
+    std::snprintf(text, sizeof text, "= %g is outside [%g, %g]%s", v, lo, hi,
+                  unit.c_str());
+    in.Fail(strict::FieldName(prefix, key), text);
+  }
+  return v;
+}
+constexpr std::string_view kEndKeys[] = {"outcome", "fault", "message"};
+constexpr std::string_view kFaultKeys[] = {"code", "name"};
 
 // A number written as `digits` lower-case hex digits ("board.build").
 std::uint32_t HexNumber(const Reader& in, const nlohmann::json& object,
@@ -102,7 +155,8 @@ nlohmann::json RunRecordToJson(const RunRecord& r) {
                         {"c_left_deg", RadToDeg(c.backlash.c_left.ToDouble())},
                         {"alpha", c.backlash.alpha.ToDouble()},
                         {"sea_stiffness_Nm_per_rad", c.sea_stiffness.ToDouble()},
-                        {"joint_zero_count", c.joint_zero_count}};
+                        {"joint_zero_count", c.joint_zero_count},
+                        {"cable_friction_Nm", c.backlash.cable_friction.ToDouble()}};
   } else {
     j["calibration"] = nullptr;
   }
@@ -122,6 +176,8 @@ nlohmann::json RunRecordToJson(const RunRecord& r) {
              {"name", FaultName(static_cast<Fault>(*r.end.fault_code))}};
   }
   j["end"] = {{"outcome", r.end.outcome}, {"fault", fault}, {"message", r.end.message}};
+  j["pid"] = r.pid ? nlohmann::json(*r.pid) : nlohmann::json(nullptr);
+  j["params"] = r.params;
   return j;
 }
 
@@ -134,12 +190,14 @@ std::optional<RunRecord> RunRecordFromJson(const nlohmann::json& j, std::string*
     if (!j.is_object()) {
       throw std::runtime_error("run.json: the top level must be an object");
     }
-    in.CheckKnown(j, "", kKeys);
-    if (in.String(j, "", "format") != kFormat) {
+    const std::string format = in.String(j, "", "format");
+    if (format != kFormat && format != kFormatV1) {
       in.Fail("format", "is not \"" + std::string(kFormat) +
                             "\" (written by another version of mjc?)");
     }
-    r.command = in.String(j, "", "command");
+    const bool v1 = format == kFormatV1;
+    in.CheckKnown(j, "", v1 ? std::span<const std::string_view>(kKeysV1) : kKeys);
+    r.command = OneOf(in, j, "", "command", kCommands);
     r.node = static_cast<int>(IntegerIn(in, j, "", "node", 1, 8));
     r.iface = in.String(j, "", "iface");
     if (const auto* b = OptionalSection(in, j, "", "board", kBoardKeys)) {
@@ -165,35 +223,61 @@ std::optional<RunRecord> RunRecordFromJson(const nlohmann::json& j, std::string*
           static_cast<std::uint16_t>(HexNumber(in, *b, "board", "instance", 4));
       r.board = info;
     }
-    if (const auto* c = OptionalSection(in, j, "", "calibration", kHeldKeys)) {
+    if (const auto* c = OptionalSection(
+            in, j, "", "calibration",
+            v1 ? std::span<const std::string_view>(kHeldKeysV1) : kHeldKeys)) {
       BoardCalibration held;
       held.calibrated = in.Bool(*c, "calibration", "calibrated");
-      held.record.backlash.c_right =
-          Angle::Quantize(DegToRad(in.Double(*c, "calibration", "c_right_deg")));
-      held.record.backlash.c_left =
-          Angle::Quantize(DegToRad(in.Double(*c, "calibration", "c_left_deg")));
-      held.record.backlash.alpha = Scale::Quantize(in.Double(*c, "calibration", "alpha"));
-      held.record.sea_stiffness =
-          Stiffness::Quantize(in.Double(*c, "calibration", "sea_stiffness_Nm_per_rad"));
+      held.record.backlash.c_right = Angle::Quantize(
+          DegToRad(NumberIn(in, *c, "calibration", "c_right_deg", -28.65, 28.65, "°")));
+      held.record.backlash.c_left = Angle::Quantize(
+          DegToRad(NumberIn(in, *c, "calibration", "c_left_deg", -28.65, 28.65, "°")));
+      held.record.backlash.alpha =
+          Scale::Quantize(NumberIn(in, *c, "calibration", "alpha", 0, 8, ""));
+      held.record.sea_stiffness = Stiffness::Quantize(NumberIn(
+          in, *c, "calibration", "sea_stiffness_Nm_per_rad", 0, 100, " N·m/rad"));
       held.record.joint_zero_count = static_cast<std::uint16_t>(
           IntegerIn(in, *c, "calibration", "joint_zero_count", 0, 16383));
+      if (!v1) {
+        held.record.backlash.cable_friction = Torque::Quantize(
+            NumberIn(in, *c, "calibration", "cable_friction_Nm", 0, 5, " N·m"));
+      }
       r.calibration = held;
     }
     r.robot = in.Value(j, "", "robot");
     if (!r.robot.is_null() && !r.robot.is_object()) {
       in.Fail("robot", "must be null or an object");
     }
+    if (!v1 && r.robot.is_object()) {
+      in.CheckKnown(r.robot, "robot.", kRobotKeys);
+      const std::string path = in.String(r.robot, "robot", "path");
+      const auto& description = in.Value(r.robot, "robot", "description");
+      if (!description.is_object()) in.Fail("robot.description", "must be an object");
+      std::string refused;
+      if (!ParseRobotDescription(description.dump(), "robot.description", &refused)) {
+        throw std::runtime_error("run.json: " + refused);
+      }
+    }
     if (!in.Value(j, "", "subject").is_null()) r.subject = in.String(j, "", "subject");
-    r.protocol = in.String(j, "", "protocol");
+    r.protocol = OneOf(in, j, "", "protocol", kProtocols);
+    if ((r.command == "calibrate") != (r.protocol == "calibration sweep")) {
+      in.Fail("protocol", "\"" + r.protocol + "\" is not a protocol of mjc " + r.command);
+    }
     const auto& amplitudes = in.Value(j, "", "amplitudes_deg");
     if (!amplitudes.is_array()) in.Fail("amplitudes_deg", "must be an array");
-    for (const auto& a : amplitudes) {
-      if (!a.is_number()) in.Fail("amplitudes_deg", "must hold numbers");
-      r.amplitudes_deg.push_back(a.get<double>());
+    for (std::size_t i = 0; i < amplitudes.size(); ++i) {
+      const std::string name = "amplitudes_deg[" + std::to_string(i) + "]";
+      if (!amplitudes[i].is_number()) in.Fail(name, "must be a number");
+      const double a = amplitudes[i].get<double>();
+      if (!std::isfinite(a) || a < 1 || a > 90) {
+        in.Fail(name, "= " + amplitudes[i].dump() + " is outside [1, 90]°");
+      }
+      r.amplitudes_deg.push_back(a);
     }
-    r.frequency_hz = in.Double(j, "", "frequency_hz");
-    r.repetitions = static_cast<int>(IntegerIn(in, j, "", "repetitions", 0, 255));
-    r.rest_s = in.Double(j, "", "rest_s");
+    if (r.amplitudes_deg.empty()) in.Fail("amplitudes_deg", "is empty");
+    r.frequency_hz = NumberIn(in, j, "", "frequency_hz", 0.08, 5, " Hz");
+    r.repetitions = static_cast<int>(IntegerIn(in, j, "", "repetitions", 1, 255));
+    r.rest_s = NumberIn(in, j, "", "rest_s", 0, 25.5, " s");
     r.started_utc = in.String(j, "", "started_utc");
     r.host = in.String(j, "", "host");
     r.mjc = in.String(j, "", "mjc");
@@ -209,6 +293,29 @@ std::optional<RunRecord> RunRecordFromJson(const nlohmann::json& j, std::string*
       (void)in.String(*f, "end.fault", "name");
     }
     r.end.message = in.String(end, "end", "message");
+    if (r.end.fault_code.has_value() != (r.end.outcome == "faulted")) {
+      in.Fail("end.fault", r.end.fault_code
+                               ? "is given, but the outcome is not \"faulted\""
+                               : "is null, but the outcome is \"faulted\"");
+    }
+    if (!v1) {
+      if (!in.Value(j, "", "pid").is_null()) {
+        r.pid = static_cast<long>(IntegerIn(in, j, "", "pid", 1, 4194304));
+      }
+      r.params = in.Value(j, "", "params");
+      if (!r.params.is_null()) {
+        if (!r.params.is_object()) in.Fail("params", "must be null or an object");
+        for (const auto& [key, value] : r.params.items()) {
+          const protocol::ParamInfo* info = FindParam(key);
+          if (info == nullptr) {
+            throw std::runtime_error("run.json: params: " + UnknownParamMessage(key));
+          }
+          const double lo = ParamValueOf(*info, static_cast<std::int32_t>(info->min_raw));
+          const double hi = ParamValueOf(*info, static_cast<std::int32_t>(info->max_raw));
+          (void)NumberIn(in, r.params, "params", key, lo, hi, "");
+        }
+      }
+    }
   } catch (const std::exception& e) {
     *why = e.what();
     return std::nullopt;
@@ -217,7 +324,7 @@ std::optional<RunRecord> RunRecordFromJson(const nlohmann::json& j, std::string*
 }
 
 void WriteRunRecord(const RunRecord& record, const std::filesystem::path& dir) {
-  WriteFile(dir / "run.json", RunRecordToJson(record).dump(2) + "\n");
+  ReplaceFile(dir / "run.json", RunRecordToJson(record).dump(2) + "\n");
 }
 
 std::optional<RunRecord> ReadRunRecord(const std::filesystem::path& dir,
@@ -226,18 +333,52 @@ std::optional<RunRecord> ReadRunRecord(const std::filesystem::path& dir,
   const std::filesystem::path path = dir / "run.json";
   std::error_code error;
   if (!std::filesystem::exists(path, error)) return std::nullopt;
-  std::ifstream in(path);
   nlohmann::json j;
   try {
-    if (!in) throw std::runtime_error("cannot read it");
-    in >> j;
+    const auto text = ReadFileText(path);
+    if (!text) throw std::runtime_error(path.string() + ": cannot read it");
+    // Strict: a repeated key or anything after the object is refused, not ignored.
+    j = strict::ParseObject<nlohmann::json>(*text, path.string());
   } catch (const std::exception& e) {
-    *why = path.string() + ": not valid JSON: " + e.what();
+    *why = e.what();
     return std::nullopt;
   }
   auto record = RunRecordFromJson(j, why);
   if (!record) *why = dir.string() + "/" + *why;
   return record;
+}
+
+bool RunStillGoing(const RunRecord& record) {
+  if (!record.pid || record.host != HostName()) return false;
+  // /proc/<pid>/comm: the process's name, so a pid used again by another program does
+  // not count.
+  std::ifstream comm("/proc/" + std::to_string(*record.pid) + "/comm");
+  std::string name;
+  return std::getline(comm, name) && name == "mjc";
+}
+
+nlohmann::json RobotRecord(const std::string& path, const std::string& text) {
+  return {{"path", path},
+          {"description", strict::ParseObject<nlohmann::json>(text, path)}};
+}
+
+nlohmann::json ReadBoardParams(BoardClient& board, std::string* why) {
+  const auto all = AllParams();
+  const auto readings = ReadParams(board, all, 500, why);
+  if (!readings) return nullptr;
+  nlohmann::json out = nlohmann::json::object();
+  for (const ParamReading& r : *readings) out[r.info->key] = ParamValueOf(*r.info, r.raw);
+  return out;
+}
+
+void DiscardUnstartedRun(const std::filesystem::path& dir,
+                         const std::vector<std::string>& outputs, bool created) {
+  std::error_code ignored;
+  for (const std::string& name : outputs) std::filesystem::remove(dir / name, ignored);
+  std::filesystem::remove(dir / "run.json.tmp", ignored);
+  if (created && std::filesystem::is_empty(dir, ignored)) {
+    std::filesystem::remove(dir, ignored);
+  }
 }
 
 std::string RunTitle(const RunRecord& r) {

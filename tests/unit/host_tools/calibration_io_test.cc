@@ -163,13 +163,13 @@ TEST(CalibrationFile, ImplausibleValuesAreKeptWithAWarningEach) {
   std::string why;
   ASSERT_TRUE(CalibrationFromJson(j, &why, &warnings)) << why;
   EXPECT_TRUE(warnings.empty());
-  // 0.0192 rad typed as degrees is plausible; 19.2 (degrees of a radian slip) is not.
-  j["c_right_deg"] = 19.2;
+  // 25° is beyond a cable's slack (degrees of a radian slip?).
+  j["c_right_deg"] = 25.0;
   j["sea_stiffness_Nm_per_rad"] = 63.0;
   ASSERT_TRUE(CalibrationFromJson(j, &why, &warnings)) << why;
   ASSERT_EQ(warnings.size(), 2u);
-  EXPECT_EQ(warnings[0].rfind("calibration: c_right_deg = 19.2° is beyond the "
-                              "plausible ±10°",
+  EXPECT_EQ(warnings[0].rfind("calibration: c_right_deg = 25° is beyond the "
+                              "plausible ±20°",
                               0),
             0u)
       << warnings[0];
@@ -177,6 +177,29 @@ TEST(CalibrationFile, ImplausibleValuesAreKeptWithAWarningEach) {
                              "[0.063, 6.3] N·m/rad"),
             std::string::npos)
       << warnings[1];
+  // The paper's 1.1° and -0.9° typed in radians: below two counts of the 14-bit joint
+  // encoder (2·360°/16384 = 0.0439°), each side named with the likely slip.
+  j = GoodCalibrationJson();
+  j["c_right_deg"] = 0.0192;
+  j["c_left_deg"] = -0.0157;
+  warnings.clear();
+  ASSERT_TRUE(CalibrationFromJson(j, &why, &warnings)) << why;
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0],
+            "calibration: c_right_deg = 0.0192° is below two counts of the 14-bit joint "
+            "encoder (0.044°), less slack than a sweep can resolve: radians written in a "
+            "degree field? (0.0192 rad is 1.10°)");
+  EXPECT_NE(warnings[1].find("c_left_deg = -0.0157° is below two counts"),
+            std::string::npos)
+      << warnings[1];
+  // Two counts and a little more: plausible.
+  j["c_right_deg"] = 0.045;
+  j["c_left_deg"] = -0.045;
+  warnings.clear();
+  ASSERT_TRUE(CalibrationFromJson(j, &why, &warnings)) << why;
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+  j = GoodCalibrationJson();
+  j["sea_stiffness_Nm_per_rad"] = 63.0;
   // Beyond what the board accepts: refused, not warned about.
   j["c_right_deg"] = 30.0;
   warnings.clear();

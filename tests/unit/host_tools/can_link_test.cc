@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,18 @@ TEST(SocketCanLink, RefusesWithAReasonWhenThereIsNoCan) {
   auto isotp = IsoTpLink::Open("", 0x3E1, 0x3F1, &why);
   EXPECT_EQ(isotp, nullptr);
   EXPECT_NE(why.find("interface name"), std::string::npos) << why;
+}
+
+// The loopback interface exists on every Linux machine and is no CAN one: named for what
+// it is, not "No such device" (bind()'s errno for it).
+TEST(SocketCanLink, AnInterfaceThatIsNotCanIsNamedForWhatItIs) {
+  if (!std::filesystem::exists("/sys/class/net/lo/type")) GTEST_SKIP() << "no sysfs";
+  std::string why;
+  EXPECT_EQ(SocketCanLink::Open("lo", &why), nullptr);
+  EXPECT_EQ(why.rfind("'lo' is not a CAN interface (it is a loopback device)", 0), 0u)
+      << why;
+  EXPECT_EQ(IsoTpLink::Open("lo", 0x3E1, 0x3F1, &why), nullptr);
+  EXPECT_EQ(why.rfind("'lo' is not a CAN interface", 0), 0u) << why;
 }
 
 }  // namespace

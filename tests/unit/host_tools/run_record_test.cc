@@ -10,6 +10,7 @@
 #include <string>
 
 #include "mjc/host/config.h"
+#include "mjc/host/report.h"
 #include "mjc/host/units.h"
 
 namespace {
@@ -107,6 +108,89 @@ TEST(RunRecord, IsStrict) {
   EXPECT_TRUE(RunRecordFromJson(j, &why)) << why;
 }
 
+// What decided the run travels with it: the robot description's content, the board's
+// parameters, the cable friction in force, and the process that wrote it.
+TEST(RunRecord, CarriesTheRobotItsParametersAndItsProcess) {
+  RunRecord r = Example();
+  r.command = "calibrate";
+  r.protocol = "calibration sweep";
+  r.end = {"completed", std::nullopt, ""};
+  const std::string text =
+      ReadFileText(std::string(MJC_SOURCE_DIR) + "/robots/maestro-default.json")
+          .value_or("");
+  ASSERT_FALSE(text.empty());
+  r.robot = RobotRecord("robots/maestro-default.json", text);
+  r.params = {{"velocity_window", 101}, {"attachment_prior_stiffness", 0.5}};
+  r.pid = 4242;
+  r.calibration->record.backlash.cable_friction = Torque::Quantize(0.125);
+  const nlohmann::json j = RunRecordToJson(r);
+  EXPECT_EQ(j["format"], "mjc run 2");
+  EXPECT_EQ(j["robot"]["description"], nlohmann::json::parse(text));
+  std::string why;
+  const auto read = RunRecordFromJson(j, &why);
+  ASSERT_TRUE(read) << why;
+  EXPECT_EQ(read->pid, 4242);
+  EXPECT_EQ(read->params["velocity_window"], 101);
+  EXPECT_EQ(read->calibration->record.backlash.cable_friction, Torque::Quantize(0.125));
+  EXPECT_EQ(RunRecordToJson(*read), j);
+  // A description the loader would refuse, a parameter the list does not have or out of
+  // its range, are refused in run.json too.
+  nlohmann::json bad = j;
+  bad["robot"]["description"]["springs"]["rate_N_per_m"] = 1e9;
+  EXPECT_FALSE(RunRecordFromJson(bad, &why));
+  EXPECT_NE(why.find("springs"), std::string::npos) << why;
+  bad = j;
+  bad["params"]["velocity_widow"] = 31;
+  EXPECT_FALSE(RunRecordFromJson(bad, &why));
+  EXPECT_NE(why.find("did you mean 'velocity_window'"), std::string::npos) << why;
+  bad = j;
+  bad["params"]["torque_max"] = -3;
+  EXPECT_FALSE(RunRecordFromJson(bad, &why));
+  EXPECT_NE(why.find("field 'params.torque_max' = -3 is outside"), std::string::npos)
+      << why;
+  // A version 1 file (no pid, params or cable friction) is still read.
+  nlohmann::json v1 = RunRecordToJson(Example());
+  v1["format"] = "mjc run 1";
+  v1.erase("pid");
+  v1.erase("params");
+  v1["calibration"].erase("cable_friction_Nm");
+  EXPECT_TRUE(RunRecordFromJson(v1, &why)) << why;
+}
+
+// Values no run can have had are refused, naming the field.
+TEST(RunRecord, RefusesValuesNoRunCanHave) {
+  struct Case {
+    const char* key;
+    nlohmann::json value;
+    const char* said;
+  };
+  const Case cases[] = {
+      {"protocol", "xyz", "field 'protocol' \"xyz\" is none of"},
+      {"protocol", "amplitud", "(did you mean \"amplitude\"?)"},
+      {"protocol", "calibration sweep", "is not a protocol of mjc trial"},
+      {"command", "trail", "(did you mean \"trial\"?)"},
+      {"frequency_hz", 1e300, "field 'frequency_hz' = 1e+300 is outside [0.08, 5] Hz"},
+      {"frequency_hz", -0.5, "is outside [0.08, 5]"},
+      {"rest_s", 99, "field 'rest_s' = 99 is outside"},
+      {"amplitudes_deg", {6, 900}, "field 'amplitudes_deg[1]' = 900 is outside [1, 90]"},
+      {"amplitudes_deg", nlohmann::json::array(), "field 'amplitudes_deg' is empty"},
+      {"repetitions", 0, "field 'repetitions'"},
+  };
+  for (const Case& c : cases) {
+    nlohmann::json j = RunRecordToJson(Example());
+    j[c.key] = c.value;
+    std::string why;
+    EXPECT_FALSE(RunRecordFromJson(j, &why)) << c.key;
+    EXPECT_NE(why.find(c.said), std::string::npos) << why;
+  }
+  nlohmann::json j = RunRecordToJson(Example());
+  j["end"]["outcome"] = "completed";  // with a fault
+  std::string why;
+  EXPECT_FALSE(RunRecordFromJson(j, &why));
+  EXPECT_NE(why.find("'end.fault' is given, but the outcome is not"), std::string::npos)
+      << why;
+}
+
 class Folders : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -129,6 +213,31 @@ TEST_F(Folders, RunRecordIsWrittenAndReadBack) {
   std::ofstream(dir_ / "run.json") << "{\"format\": ";
   EXPECT_FALSE(ReadRunRecord(dir_, &why));
   EXPECT_NE(why.find("not valid JSON"), std::string::npos) << why;
+  // Rewritten whole through a temporary: none is left behind.
+  WriteRunRecord(Example(), dir_);
+  EXPECT_FALSE(fs::exists(dir_ / "run.json.tmp"));
+  const std::string good = RunRecordToJson(Example()).dump(2);
+  // Anything after the object, and a key given twice, are refused, not ignored.
+  std::ofstream(dir_ / "run.json", std::ios::trunc) << good << "\n{}\n";
+  EXPECT_FALSE(ReadRunRecord(dir_, &why));
+  EXPECT_NE(why.find("not valid JSON"), std::string::npos) << why;
+  std::string twice = good;
+  twice.insert(twice.find("\"node\""), "\"node\": 7,\n  ");
+  std::ofstream(dir_ / "run.json", std::ios::trunc) << twice;
+  EXPECT_FALSE(ReadRunRecord(dir_, &why));
+  EXPECT_NE(why.find("key 'node' appears twice"), std::string::npos) << why;
+}
+
+// A run.json left saying "running": still going only while its process is an mjc on
+// this host.
+TEST(RunRecord, ARunningRecordWhoseProcessIsGoneIsTold) {
+  RunRecord r = Example();
+  r.end = {};
+  r.host = HostName();
+  r.pid = static_cast<long>(::getpid());  // alive, but not an mjc (the test)
+  EXPECT_FALSE(RunStillGoing(r));
+  r.pid = std::nullopt;
+  EXPECT_FALSE(RunStillGoing(r));
 }
 
 TEST_F(Folders, ByDefaultEachRunGetsANewFolder) {

@@ -2,8 +2,10 @@
 #include "mjc/host/trial_report.h"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -181,8 +183,10 @@ TEST_F(WindowsCsv, AnUnknownMotionIsMalformed) {
   std::ofstream(dir_ / "windows.csv") << text;
   std::string why;
   EXPECT_FALSE(ReadWindowsCsv(dir_, &why));
-  EXPECT_NE(why.find("line 3 is malformed"), std::string::npos)
-      << why;  // after the note and header
+  // After the note and header, naming the column.
+  EXPECT_NE(why.find("line 3, motion: 'sideways' is not flexion or extension"),
+            std::string::npos)
+      << why;
 }
 
 TEST_F(WindowsCsv, AnUnwritableFolderThrowsNamingTheFile) {
@@ -196,6 +200,92 @@ TEST_F(WindowsCsv, AnUnwritableFolderThrowsNamingTheFile) {
         << e.what();
     EXPECT_NE(std::string(e.what()).find("No such file"), std::string::npos) << e.what();
   }
+}
+
+// The file as WriteWindowsCsv wrote it, with `from` replaced by `to` in its row
+// number `row` (counted from 1 below the header).
+std::string Edited(const std::filesystem::path& dir, int row, const std::string& from,
+                   const std::string& to) {
+  std::stringstream read;
+  read << std::ifstream(dir / "windows.csv").rdbuf();
+  std::string text = read.str();
+  std::size_t at = 0;
+  for (int line = 0; line < row + 1; ++line) at = text.find('\n', at) + 1;
+  const std::size_t end = text.find('\n', at);
+  std::string line = text.substr(at, end - at);
+  const std::size_t cell = line.find(from);
+  EXPECT_NE(cell, std::string::npos) << line;
+  line.replace(cell, from.size(), to);
+  text.replace(at, end - at, line);
+  return text;
+}
+
+// Each row that the board could not have sent, or that contradicts another, is refused
+// naming its line and column; each case checked against the untouched file first.
+TEST_F(WindowsCsv, RefusesWhatTheBoardCannotHaveSentNamingLineAndColumn) {
+  const std::vector<TrialWindows> trials = {
+      {25.0, 5, {Flexion(1, 40, true), Flexion(2, 45, true)}}};
+  struct Case {
+    int row;
+    std::string from, to, said;
+  };
+  // Row 1's cells: 1,25,5,flexion,2,1,1,40,0.01,-0.005,0.005,0.011,-0.006,0,0,0,...
+  const Case cases[] = {
+      {1, ",40,", ",nan,", "line 3, eta_pct: 'nan' is not a finite decimal number"},
+      {1, ",40,", ",inf,", "line 3, eta_pct: 'inf' is not a finite"},
+      {1, ",0.011,", ",1e300,", "line 3, positive_J: 1e300 is outside [0, 128]"},
+      {1, ",0.01,-0.005,0.005,", ",-0.01,-0.005,-0.015,",
+       "line 3, loading_J: -0.01 is not positive, yet eta_valid"},
+      {2, ",0.005,0.011,", ",0.007,0.011,", "line 4, net_J: 0.007 is not loading_J"},
+      {2, ",-0.006,", ",0.006,", "line 4, negative_J: 0.006 is outside [-128, 0]"},
+      {2, "1,25,", "1,26,", "line 4, amplitude_deg: 26° contradicts line 3's 25°"},
+      {2, "1,25,5,", "1,25,7,", "line 4, repetitions: 7 contradicts line 3's 5"},
+      {2, ",flexion,3,", ",flexion,2,",
+       "line 4, the flexion of repetition 2 of trial 1 again (first on line 3)"},
+      {2, ",flexion,3,1,", ",flexion,3,0,", "line 4, analysed: 0 contradicts the window"},
+      {1, ",40,", ",140,", "line 3, eta_pct: 140 is above 100 %"},
+      {1, "1,25,", "1,0.5,", "line 3, amplitude_deg: 0.5 is outside [1, 90]"},
+  };
+  for (const Case& c : cases) {
+    WriteWindowsCsv(trials, dir_);
+    std::string why;
+    ASSERT_TRUE(ReadWindowsCsv(dir_, &why)) << why;
+    const std::string text = Edited(dir_, c.row, c.from, c.to);
+    std::ofstream(dir_ / "windows.csv", std::ios::trunc) << text;
+    EXPECT_FALSE(ReadWindowsCsv(dir_, &why)) << c.to;
+    EXPECT_NE(why.find(c.said), std::string::npos) << why;
+  }
+}
+
+// A writer that dies: every window appended before its death is in the file, and a row
+// cut in the middle (only a dying writer leaves one) is left out and said.
+TEST_F(WindowsCsv, AWriterKilledMidRunLeavesEveryWindowItAppended) {
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    WindowsCsvWriter csv(dir_);
+    csv.Append(0, 25.0, 5, Flexion(0, 40, true));
+    csv.Append(0, 25.0, 5, Flexion(1, 41, true));
+    csv.Append(1, 25.0, 5, Flexion(0, 42, true));
+    ::kill(::getpid(), SIGKILL);  // no destructor, no flush, no exit handler
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  std::string why;
+  bool cut = true;
+  const auto read = ReadWindowsCsv(dir_, &why, nullptr, &cut);
+  ASSERT_TRUE(read) << why;
+  EXPECT_FALSE(cut);
+  ASSERT_EQ(read->size(), 2u);
+  EXPECT_EQ((*read)[0].windows.size(), 2u);
+  EXPECT_EQ((*read)[1].windows[0].eta_percent, 42);
+  // Half a row more, as a writer killed inside its write would leave.
+  std::ofstream(dir_ / "windows.csv", std::ios::app) << "2,25,5,flexion,2,1,1,4";
+  const auto again = ReadWindowsCsv(dir_, &why, nullptr, &cut);
+  ASSERT_TRUE(again) << why;
+  EXPECT_TRUE(cut);
+  EXPECT_EQ((*again)[1].windows.size(), 1u);
 }
 
 // The figure, drawn by gnuplot on the host (the kernel-layer scripts draw none: a

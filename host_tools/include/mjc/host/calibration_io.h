@@ -86,9 +86,9 @@ UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
 // as `mjc calibrate` and the paper's scenarios record it: every angle sample `board`
 // receives until the board leaves kCalibrating. Followed at the board's pace (Patience):
 // at most twice the sweep's `length_s` in the board's time, plus 2 s, and the board may
-// not fall silent. `each`, when given, runs on every pass of the wait after the new
-// samples are taken (a caller's progress line). The samples are kept however the wait
-// ended.
+// not fall silent. `each`, when given, runs on every pass of the wait with the samples
+// it has just taken (none, often): a caller's progress line, and the record written as
+// it arrives. The samples are kept however the wait ended.
 struct SweepSamples {
   std::vector<double> motor_rad, joint_rad;
   bool ended = false;  // the board left kCalibrating; if not, `end` and *why say how
@@ -96,7 +96,8 @@ struct SweepSamples {
   std::uint64_t malformed = 0;  // frames `board` found malformed while recording
 };
 SweepSamples RecordSweep(BoardClient& board, double length_s,
-                         const std::function<void()>& each, std::string* why);
+                         const std::function<void(std::span<const AngleSample>)>& each,
+                         std::string* why);
 
 // A calibration sweep fitted and turned into the record to upload, as `mjc calibrate`
 // does it (and the paper's scenarios and the virtual board's rig, through this one

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -70,6 +71,38 @@ class CsvTable {
 // std::runtime_error naming the path and the system's reason when it cannot be opened,
 // written or closed, so a full disk or a missing folder is never a silent loss.
 void WriteFile(const std::filesystem::path& path, std::string_view text);
+
+// The whole of the file at `path`; nullopt when it cannot be opened or read.
+std::optional<std::string> ReadFileText(const std::filesystem::path& path);
+
+// WriteFile for a file that is rewritten while a run goes on (run.json): the text goes
+// to `path`.tmp, which then replaces `path` in one rename, so a reader — or whoever
+// finds the folder after this process was killed mid-write — sees the old text or the
+// new one, whole, never a cut one. Throws as WriteFile.
+void ReplaceFile(const std::filesystem::path& path, std::string_view text);
+
+// A file written a record at a time, as the records arrive (windows.csv, sweep.csv):
+// each Append goes to the kernel at once with write(2), no buffer in this process, so
+// the process's death (SIGKILL, a crash, an OOM kill) loses nothing already appended.
+// (The kernel writes it to disk in its own time: a power cut may lose its last
+// seconds, the process's end never.)
+class AppendFile {
+ public:
+  // Creates `path` (truncating a file of that name: the run's folder was prepared for
+  // it); throws std::runtime_error naming the path and the system's reason.
+  explicit AppendFile(std::filesystem::path path);
+  ~AppendFile();
+  AppendFile(const AppendFile&) = delete;
+  AppendFile& operator=(const AppendFile&) = delete;
+  // Appends `text` whole (retrying short writes); throws std::runtime_error naming the
+  // path when it cannot (a full disk), so a lost record is never silent.
+  void Append(std::string_view text);
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+  int fd_ = -1;
+};
 
 // Runs gnuplot on `script` (written next to its outputs so it can be re-run by hand).
 // What gnuplot says goes to `script`.log, removed when it succeeds. Returns false with

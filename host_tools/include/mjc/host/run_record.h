@@ -36,10 +36,20 @@ struct RunRecord {
   std::string iface;
   std::optional<protocol::BoardInfo> board;     // the board's BoardInfo, if it sent one
   std::optional<BoardCalibration> calibration;  // read from the board at the start
-  nlohmann::json robot;                         // null: no robot descriptions yet
-  std::optional<std::string> subject;           // as the operator gave it
-  std::string protocol;                         // repeatability, amplitude, sweep
-  std::vector<double> amplitudes_deg;           // a trial's each; a sweep's final one
+  // The robot description the run used (calibrate --robot): {"path": the file as
+  // given, "description": its content, as read}; null without one. The content, not
+  // only the path: the file may change or go after the run.
+  nlohmann::json robot;
+  // Every parameter the board held when the run started (protocol/params.h's keys, in
+  // the list's units): the velocity window, the attachment's priors, the torque limit
+  // and the rest that shape its estimate. Null when they could not be read.
+  nlohmann::json params;
+  // This process, while the run goes on: a run.json still saying "running" whose
+  // process is gone belongs to a host that died without a word (RunStillGoing).
+  std::optional<long> pid;
+  std::optional<std::string> subject;  // as the operator gave it
+  std::string protocol;                // repeatability, amplitude, sweep
+  std::vector<double> amplitudes_deg;  // a trial's each; a sweep's final one
   double frequency_hz = 0;
   int repetitions = 0;  // per trial; a sweep's cycles
   double rest_s = 0;
@@ -54,13 +64,36 @@ nlohmann::json RunRecordToJson(const RunRecord& record);
 // its type. nullopt with the reason naming the key.
 std::optional<RunRecord> RunRecordFromJson(const nlohmann::json& json, std::string* why);
 
-// Writes dir/run.json (replacing it: a run rewrites its own as it ends); throws
+// Writes dir/run.json (replacing it whole, ReplaceFile: a run rewrites its own at each
+// change of its state, and a process killed mid-write leaves the previous one); throws
 // std::runtime_error naming the file when it cannot.
 void WriteRunRecord(const RunRecord& record, const std::filesystem::path& dir);
 // dir/run.json: nullopt with *why empty when there is none (a folder from before
 // run.json), or with the reason when it is unreadable or refused.
 std::optional<RunRecord> ReadRunRecord(const std::filesystem::path& dir,
                                        std::string* why);
+
+// For a run.json that still says "running": whether its process is still there (the
+// same host, its pid alive and an mjc). False: the host died without a word (SIGKILL,
+// a crash, a power cut), and its files hold what it had received.
+bool RunStillGoing(const RunRecord& record);
+
+// The "robot" of run.json for a description read from `path` (its text): {"path",
+// "description"}; throws std::runtime_error when the text is not JSON.
+nlohmann::json RobotRecord(const std::string& path, const std::string& text);
+
+// Every parameter `board` holds (param_io.h's ReadParams of the whole list), as
+// run.json's "params": {key: value in the list's units}; null with *why when a read
+// went unanswered.
+nlohmann::json ReadBoardParams(BoardClient& board, std::string* why);
+
+// A run that ended before anything moved (no interface, no board, a refusal) leaves
+// no folder behind for a lab to wonder about: the files named in `outputs` are removed
+// from `dir` (with run.json's temporary), and `dir` itself when it is then empty and
+// `created` (this run made it). Errors are ignored: this is tidying, the failure is
+// said already.
+void DiscardUnstartedRun(const std::filesystem::path& dir,
+                         const std::vector<std::string>& outputs, bool created);
 
 // A figure's title: what was run, on which board, for whom, when ("Energy loss per
 // flexion: amplitude protocol, node 2, subject S07, 2026-11-24T10:31:05Z").

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "mjc/host/board_client.h"
+#include "mjc/host/report.h"
 
 namespace mjc::host {
 
@@ -37,13 +38,49 @@ bool SameAmplitude(const std::vector<TrialWindows>& trials);
 void WriteWindowsCsv(const std::vector<TrialWindows>& trials,
                      const std::filesystem::path& dir);
 
+// windows.csv as the windows arrive: the note and the header when it is created, then
+// each window's row the moment it is appended, straight to the kernel (AppendFile), so a
+// host that dies mid-run loses at most the window it was handling. The same file as
+// WriteWindowsCsv's.
+class WindowsCsvWriter {
+ public:
+  // Creates dir/windows.csv; throws std::runtime_error naming it when it cannot.
+  explicit WindowsCsvWriter(const std::filesystem::path& dir);
+  // The window `w` of trial `trial` (counted from 0) of `repetitions` at
+  // `amplitude_deg`; throws std::runtime_error naming the file when it cannot be written.
+  void Append(std::size_t trial, double amplitude_deg, std::uint16_t repetitions,
+              const BoardWindow& w);
+  std::size_t rows() const { return rows_; }
+  const std::filesystem::path& path() const { return file_.path(); }
+
+ private:
+  AppendFile file_;
+  std::size_t rows_ = 0;
+};
+
 // Reads a windows.csv back, of any version (*version, when given, says which): the
 // windows' repetitions counted from 0 again, as the board counts them. A version 1
-// file's trials take their largest repetition + 1 as their repetitions. nullopt with
-// the reason when it is missing or malformed.
+// file's trials take their largest repetition + 1 as their repetitions. Strict: nullopt
+// with the reason, naming the line and the column, when it is missing or when a cell is
+// not what the board can have sent — not a finite decimal number, outside what its
+// frame carries (energies, power and torque ±128, η ±32768 %), a work of the wrong sign
+// (positive_J < 0, negative_J > 0), a net_J other than loading_J + unloading_J, a valid
+// η above 100 % or from a loading energy ≤ 0, an analysed flag the window contradicts —
+// or when rows contradict each other: a window twice, a trial's amplitude or
+// repetitions changing between its rows, a trial without windows before one with. A
+// last row without its newline (the writer died in the middle of it) is left out and
+// *cut_last set.
 std::optional<std::vector<TrialWindows>> ReadWindowsCsv(const std::filesystem::path& dir,
                                                         std::string* why,
-                                                        int* version = nullptr);
+                                                        int* version = nullptr,
+                                                        bool* cut_last = nullptr);
+
+// The same from the text of a windows.csv; `source` names it in messages.
+std::optional<std::vector<TrialWindows>> ParseWindowsCsv(const std::string& text,
+                                                         const std::string& source,
+                                                         std::string* why,
+                                                         int* version = nullptr,
+                                                         bool* cut_last = nullptr);
 
 // eta.png in `dir` (gnuplot) from its `data` (a version 2 windows.csv): η of every valid
 // flexion window against the trial number (repeatability) or the amplitude, the analysed

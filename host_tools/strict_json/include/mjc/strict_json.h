@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace mjc::strict {
 
@@ -60,9 +61,73 @@ const Json* Member(const Json& object, std::string_view key) {
   return it == object.end() ? nullptr : &*it;
 }
 
+// A SAX handler (Json::sax_parse) that finds the first key an object repeats: JSON
+// leaves a repeated key's meaning open, and nlohmann's parser keeps the last value
+// without a word, so a file saying c_right_deg twice would be read as whichever came
+// last. `duplicate` gets its dotted name ("cable.alpha"); the parse stops there.
+template <class Json>
+class DuplicateKeyCheck {
+ public:
+  std::string duplicate;
+
+  bool null() { return Value(); }
+  bool boolean(bool) { return Value(); }
+  bool number_integer(typename Json::number_integer_t) { return Value(); }
+  bool number_unsigned(typename Json::number_unsigned_t) { return Value(); }
+  bool number_float(typename Json::number_float_t, const typename Json::string_t&) {
+    return Value();
+  }
+  bool string(typename Json::string_t&) { return Value(); }
+  bool binary(typename Json::binary_t&) { return Value(); }
+  bool start_object(std::size_t) {
+    levels_.push_back({true, {}, NameOfValue()});
+    return true;
+  }
+  bool key(typename Json::string_t& k) {
+    Level& level = levels_.back();
+    for (const std::string& seen : level.keys) {
+      if (seen == k) {
+        duplicate = FieldName(level.name, k);
+        return false;
+      }
+    }
+    level.keys.push_back(k);
+    return true;
+  }
+  bool end_object() { return End(); }
+  bool start_array(std::size_t) {
+    levels_.push_back({false, {}, NameOfValue()});
+    return true;
+  }
+  bool end_array() { return End(); }
+  bool parse_error(std::size_t, const std::string&, const typename Json::exception&) {
+    return false;
+  }
+
+ private:
+  struct Level {
+    bool object;
+    std::vector<std::string> keys;  // an object's keys so far (few: a linear search)
+    std::string name;               // its dotted name ("" at the top)
+  };
+  std::vector<Level> levels_;
+  // The dotted name of the value that starts now: its key's, or its array's name.
+  std::string NameOfValue() const {
+    if (levels_.empty()) return "";
+    const Level& l = levels_.back();
+    return l.object ? FieldName(l.name, l.keys.back()) : l.name;
+  }
+  bool Value() { return true; }
+  bool End() {
+    levels_.pop_back();
+    return true;
+  }
+};
+
 // The text of a file whose top level is an object, parsed; std::runtime_error
-// "<source>: not valid JSON: …" (syntax, or a number a double cannot hold) or "<source>:
-// the top level must be an object".
+// "<source>: not valid JSON: …" (syntax, data after the value, or a number a double
+// cannot hold), "<source>: key 'a.b' appears twice" or "<source>: the top level must be
+// an object".
 template <class Json>
 Json ParseObject(std::string_view text, std::string_view source) {
   Json root;
@@ -70,6 +135,11 @@ Json ParseObject(std::string_view text, std::string_view source) {
     root = Json::parse(text);
   } catch (const typename Json::exception& e) {
     throw std::runtime_error(std::string(source) + ": not valid JSON: " + e.what());
+  }
+  DuplicateKeyCheck<Json> check;
+  if (!Json::sax_parse(text, &check) && !check.duplicate.empty()) {
+    throw std::runtime_error(std::string(source) + ": key '" + check.duplicate +
+                             "' appears twice (which one was meant?)");
   }
   if (!root.is_object()) {
     throw std::runtime_error(std::string(source) + ": the top level must be an object");
