@@ -69,6 +69,17 @@ void ResetAndRestoreCaches(std::uint32_t acr) {
 volatile std::uint32_t g_ecc_errors = 0;
 volatile std::uint32_t g_ecc_address = 0;
 
+// Whether a double error was found since `before` (a count of g_ecc_errors): the NMI
+// counted one, or a detection flag is still set because the NMI, which a peripheral
+// raises, has not been taken yet after the last load. The barrier completes the loads
+// before the flag is read.
+bool EccErrorSince(std::uint32_t before) {
+  DataSyncBarrier();
+  if (g_ecc_errors != before) return true;
+  const std::uint32_t eccr = Read32(flash::kBase + flash::kEccr);
+  return flash::eccr::kEccd.IsSet(eccr) || flash::eccr::kEccd2.IsSet(eccr);
+}
+
 FlashResult Finish(std::uint32_t clear_bits, std::uint32_t acr, bool done) {
   const std::uint32_t errors = TakeErrors();
   Write32(kCr, Read32(kCr) & ~clear_bits);
@@ -123,7 +134,7 @@ FlashResult Stm32g4Flash::DoProgram(std::uint32_t page, std::uint32_t offset,
   // it, and the page must be erased first.
   const std::uint32_t ecc_before = g_ecc_errors;
   const std::uint32_t low = Read32(address), high = Read32(address + 4);
-  if (g_ecc_errors != ecc_before) return FlashResult::kHardwareError;
+  if (EccErrorSince(ecc_before)) return FlashResult::kHardwareError;
   if (low != 0xFFFFFFFFu || high != 0xFFFFFFFFu) return FlashResult::kNotErased;
   // RM0440 §5.3.8 "Flash main memory programming sequences", standard programming: BSY
   // = 0, errors cleared, PG = 1, the double-word as two 32-bit writes (low word at the
@@ -155,20 +166,23 @@ FlashResult Stm32g4Flash::DoRead(std::uint32_t page, std::uint32_t offset,
       out[i] = static_cast<std::uint8_t>(word >> (8 * b));
     }
   }
-  return g_ecc_errors == ecc_before ? FlashResult::kOk : FlashResult::kHardwareError;
+  return EccErrorSince(ecc_before) ? FlashResult::kHardwareError : FlashResult::kOk;
 }
 
 bool HandleFlashEccNmi() {
   const Address eccr = flash::kBase + flash::kEccr;
   const std::uint32_t v = Read32(eccr);
-  if (!flash::eccr::kEccd.IsSet(v)) return false;
+  const std::uint32_t detected =
+      v & (flash::eccr::kEccd.Bit() | flash::eccr::kEccd2.Bit());
+  if (detected == 0) return false;
   const std::uint32_t bank_offset =
       flash::eccr::kBkEcc.IsSet(v)
           ? Stm32g4Flash::kPagesPerBank * flash::kDualBankPageBytes
           : 0u;
   g_ecc_address = flash::kMainMemory + bank_offset + flash::eccr::kAddrEcc.Get(v);
-  // ECCD is cleared by writing 1; ECCC (also write-1) is left as it is, ECCCIE kept.
-  Write32(eccr, (v & flash::eccr::kEcccie.Bit()) | flash::eccr::kEccd.Bit());
+  // ECCD (ECCD2) is cleared by writing 1; ECCC (also write-1) is left as it is, ECCCIE
+  // kept.
+  Write32(eccr, (v & flash::eccr::kEcccie.Bit()) | detected);
   g_ecc_errors = g_ecc_errors + 1u;
   return true;
 }

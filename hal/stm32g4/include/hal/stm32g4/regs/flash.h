@@ -23,8 +23,8 @@ inline constexpr FieldDef kCrFields[] = {
     {"BKER", 11, 1}, {"START", 16, 1}, {"LOCK", 31, 1},
 };
 inline constexpr FieldDef kEccrFields[] = {
-    {"ADDR_ECC", 0, 19}, {"BK_ECC", 21, 1}, {"SYSF_ECC", 22, 1},
-    {"ECCCIE", 24, 1},   {"ECCC", 30, 1},   {"ECCD", 31, 1},
+    {"ADDR_ECC", 0, 19}, {"BK_ECC", 21, 1}, {"SYSF_ECC", 22, 1}, {"ECCCIE", 24, 1},
+    {"ECCD2", 29, 1},    {"ECCC", 30, 1},   {"ECCD", 31, 1},
 };
 inline constexpr FieldDef kOptrFields[] = {
     {"DBANK", 22, 1},  // 1: dual bank, 2 KB pages
@@ -96,6 +96,10 @@ inline constexpr Field kSysfEcc = FieldOf(kBlock, "ECCR", "SYSF_ECC");
 inline constexpr Field kEcccie = FieldOf(kBlock, "ECCR", "ECCCIE");
 inline constexpr Field kEccc = FieldOf(kBlock, "ECCR", "ECCC");
 inline constexpr Field kEccd = FieldOf(kBlock, "ECCR", "ECCD");
+// The SVD also lists ECCD2 (a detection flag of its own, cleared by writing 1); the NMI
+// handler treats it as ECCD, so whichever flag a double error sets, the handler takes it
+// instead of the reset a DefaultHandler would make of it.
+inline constexpr Field kEccd2 = FieldOf(kBlock, "ECCR", "ECCD2");
 }  // namespace eccr
 namespace optr {
 inline constexpr Field kDbank = FieldOf(kBlock, "OPTR", "DBANK");
