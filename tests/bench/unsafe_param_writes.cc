@@ -121,10 +121,7 @@ int main() {
   sweep.frequency_mHz = 100;
   sweep.repetitions = 255;
   sweep.rest_100ms = 0;
-  const auto started =
-      client.Send(sweep, &why)
-          ? client.Command(protocol::CommandCode::kStartSweep, host::kStartAnswerMs, &why)
-          : std::nullopt;
+  const auto started = client.Start(sweep, host::kStartAnswerMs, &why);
   if (!started || *started != protocol::CommandOutcomeCode::kAccepted) {
     fail("the sweep did not start: " + why);
   } else if (!client.Await(

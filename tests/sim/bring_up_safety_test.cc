@@ -154,8 +154,7 @@ TEST(VirtualBoardDebugHalt, FreezesTheWatchdogAndTakesTheBridgeToIdle) {
   host::WaitEnd end{};
   ASSERT_TRUE(client.Await([&] { return client.status().heard; }, {}, &end, &why)) << why;
   // The calibration sweep drives the motor: the bridge enabled at a varying duty.
-  ASSERT_TRUE(client.Send(g474board::rig::PaperSweep(), &why)) << why;
-  ASSERT_EQ(client.Command(protocol::CommandCode::kStartSweep, 1000, &why),
+  ASSERT_EQ(client.Start(g474board::rig::PaperSweep(), 1000, &why),
             protocol::CommandOutcomeCode::kAccepted)
       << why;
   const PinId in1 = Pin('A', 8), in2 = Pin('A', 9), enable = Pin('B', 10);

@@ -145,7 +145,8 @@ MJC_VECTOR_TEST(ParamBounds, NoProtectionChangesWhileAMotionRuns) {
   TrialConfig t;
   t.amplitude = Angle::FromDouble(0.2);
   b.node.HandleFrame(Encode(t, 1));
-  b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 1, 0}, 1));
+  b.node.HandleFrame(
+      Encode(Command{CommandCode::kStartTrial, 1, 0, ConfigDigestOf(t)}, 1));
   b.Run(2);
   VT_EXPECT_TRUE(b.app.state() == BoardState::kRunning);
   for (const Bounds& p : kProtections) {

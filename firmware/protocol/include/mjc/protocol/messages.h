@@ -648,7 +648,7 @@ MJC_MESSAGE(BoardInfo, kBoardInfo, 8, kBoard, MakeSignal("build", &T::build, 0, 
             MakeSignal("dirty", &T::dirty, 32, 1), MakeSignal("image", &T::image, 33, 3),
             MakeSignal("reset_cause", &T::reset_cause, 36, 4),
             MakeSignal("instance", &T::instance, 40, 16),
-            MakeSignal("flash_unreadable", &T::flash_unreadable, 56, 4));
+            MakeSignal("flash_unreadable", &T::flash_unreadable, 56, 8));
 MJC_MESSAGE(HostHeartbeat, kHostHeartbeat, 3, kHost,
             MakeSignal("sequence", &T::sequence, 0, 8),
             MakeSignal("session", &T::session, 8, 16));
