@@ -241,7 +241,7 @@ std::string BoardClient::NoHeartbeatMessage() const {
   }
   return who + " sends frames but no heartbeat for " +
          std::to_string(kHeartbeatSilence.count()) +
-         " ms: its heartbeats are off (HeartbeatHz 0?)";
+         " ms: not this application's heartbeat (an older or foreign image on the node?)";
 }
 
 std::string BoardClient::RefusalMessage(CommandOutcomeCode outcome) const {
