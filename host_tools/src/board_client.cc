@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
 #include <random>
 #include <utility>
@@ -10,6 +11,18 @@
 #include "mjc/host/describe.h"
 
 namespace mjc::host {
+
+std::chrono::milliseconds DefaultSilence() {
+  static const std::chrono::milliseconds silence = [] {
+    const char* text = std::getenv("MJC_SILENCE_S");
+    if (text == nullptr || *text == '\0') return std::chrono::milliseconds{10000};
+    char* end = nullptr;
+    const long s = std::strtol(text, &end, 10);
+    if (*end != '\0' || s < 1 || s > 3600) return std::chrono::milliseconds{10000};
+    return std::chrono::milliseconds{s * 1000};
+  }();
+  return silence;
+}
 
 using protocol::BoardInfo;
 using protocol::BoardState;

@@ -81,6 +81,13 @@ inline constexpr std::chrono::milliseconds kHostHeartbeatPeriod{100};
 // machine's clock. A real board keeps real time, so for a lab both bounds are wall
 // time; a simulated board on a loaded machine may run slower than real time, and is
 // then waited for as long as it keeps talking and has not used up its own time.
+// The wall-clock silence after which the tools take a node as gone: 10 s, or
+// MJC_SILENCE_S (1..3600 s) when set. A real board keeps real time and sends a heartbeat
+// every 100 ms; a simulated board in a deliberately slowed, loaded test VM runs at a
+// tenth of real time or less, and scripts/kernel-vm sets MJC_SILENCE_S in proportion to
+// its slowdown there. A value outside the range is ignored (10 s).
+std::chrono::milliseconds DefaultSilence();
+
 struct Patience {
   // Board time the wait may take, read off its heartbeat's tick counter (counted from
   // the first heartbeat the wait sees); 0 = no bound beyond silence.
@@ -89,7 +96,7 @@ struct Patience {
   // A real board sends at least its heartbeat every 100 ms; a simulated one starved of
   // CPU (a slow machine, a frame flood in a slowed virtual machine) was seen silent for
   // seconds.
-  std::chrono::milliseconds silence{10000};
+  std::chrono::milliseconds silence = DefaultSilence();
 };
 
 // What the tools allow a board for answering a start command: like Patience, its own
