@@ -10,8 +10,8 @@ source, CMake, linker and shell file:
   `firmware/core/FIXED_POINT.md` or hal/stm32g4/mmio.h: it names a tracked file or folder,
   from the repository's root, from the referring file's folder, or as an include path
   (the tail of a tracked file's path). A path with a `*` must match at least one tracked
-  file. Output folders (`build/`, `out/`) and paths with placeholders (`<name>`, `$X`)
-  are not checked;
+  file. Not checked: output folders (`build/`, `out/`) and paths with placeholders
+  (`<name>`, `$X`);
 - a bare source file name (`flash.cc`, `stm32g474.ld`): some tracked file has that name;
 - `file:Symbol` (`board.cc:BootEntry`): the file resolves and contains the symbol;
 - `§N` after a reference to one of the repository's documents (`docs/DESIGN.md` §3,
