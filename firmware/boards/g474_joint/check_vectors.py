@@ -1,16 +1,23 @@
 #!/usr/bin/python3
 """Checks the linked image's vector table against ST's SVD.
 
-Usage: check_vectors.py SVD ELF OBJCOPY NM HANDLER=SVD_INTERRUPT...
+Usage: check_vectors.py SVD ELF OBJCOPY NM HANDLER=INTERRUPT...
 
 Reads .isr_vector from ELF (objcopy), names each entry by the symbol at its address
 (nm), and checks, with the SVD's interrupt numbers (parsed with ElementTree):
   * the table has 16 + (last SVD interrupt + 1) entries;
-  * each HANDLER sits at 16 + the SVD's number of its SVD_INTERRUPT;
+  * each HANDLER sits at 16 + the SVD's number of its INTERRUPT, or, for a Cortex-M4
+    system exception (NMI, HardFault, ...; the SVD does not list them), at the
+    exception number the ARMv7-M Architecture Reference Manual (B1.5.2) gives it;
   * every other position of an SVD interrupt holds DefaultHandler;
-  * position 1 is Reset_Handler, 2..6 and 11, 12, 14, 15 DefaultHandler.
+  * position 1 is Reset_Handler, every other system exception DefaultHandler.
 Prints each mismatch and exits 1 if there is any.
 """
+
+# ARMv7-M ARM, B1.5.2 "Exception number definition": the system exceptions' numbers.
+SYSTEM_EXCEPTIONS = {"NMI": 2, "HardFault": 3, "MemManage": 4, "BusFault": 5,
+                     "UsageFault": 6, "SVCall": 11, "DebugMonitor": 12, "PendSV": 14,
+                     "SysTick": 15}
 
 import os
 import struct
@@ -51,10 +58,15 @@ def main(argv):
         errors.append(f"table has {len(words)} entries, the SVD needs {expected_count}")
     if name(1) != "Reset_Handler":
         errors.append(f"position 1: {name(1)}, not Reset_Handler")
-    for position in (2, 3, 4, 5, 6, 11, 12, 14, 15):
-        if name(position) != "DefaultHandler":
-            errors.append(f"position {position}: {name(position)}, not DefaultHandler")
+    system = {h: e for h, e in placed.items() if e in SYSTEM_EXCEPTIONS}
+    for exception, position in SYSTEM_EXCEPTIONS.items():
+        handler = next((h for h, e in system.items() if e == exception), "DefaultHandler")
+        if name(position) != handler:
+            errors.append(f"position {position} ({exception}): {name(position)}, "
+                          f"not {handler}")
     for handler, irq in placed.items():
+        if irq in SYSTEM_EXCEPTIONS:
+            continue
         if irq not in interrupts:
             errors.append(f"{handler}: {irq} is not an interrupt of the SVD")
             continue
