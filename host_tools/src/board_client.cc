@@ -12,16 +12,31 @@
 
 namespace mjc::host {
 
-std::chrono::milliseconds DefaultSilence() {
-  static const std::chrono::milliseconds silence = [] {
+namespace {
+
+// MJC_SILENCE_S when set to a whole number of seconds in 1..3600.
+std::optional<std::chrono::milliseconds> SilenceFromEnvironment() {
+  static const std::optional<std::chrono::milliseconds> silence =
+      []() -> std::optional<std::chrono::milliseconds> {
     const char* text = std::getenv("MJC_SILENCE_S");
-    if (text == nullptr || *text == '\0') return std::chrono::milliseconds{10000};
+    if (text == nullptr || *text == '\0') return std::nullopt;
     char* end = nullptr;
     const long s = std::strtol(text, &end, 10);
-    if (*end != '\0' || s < 1 || s > 3600) return std::chrono::milliseconds{10000};
+    if (*end != '\0' || s < 1 || s > 3600) return std::nullopt;
     return std::chrono::milliseconds{s * 1000};
   }();
   return silence;
+}
+
+}  // namespace
+
+std::chrono::milliseconds DefaultSilence() {
+  return SilenceFromEnvironment().value_or(std::chrono::milliseconds{10000});
+}
+
+std::chrono::milliseconds ExchangeSilence(std::chrono::milliseconds timeout) {
+  const auto environment = SilenceFromEnvironment();
+  return environment ? std::max(timeout, *environment) : timeout;
 }
 
 using protocol::BoardInfo;
@@ -216,7 +231,7 @@ std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int tim
   };
   const std::chrono::milliseconds timeout{timeout_ms};
   WaitEnd end{};
-  if (Await(answered, {timeout, timeout}, &end, why)) {
+  if (Await(answered, {timeout, ExchangeSilence(timeout)}, &end, why)) {
     answer_ = last_result_;
     return last_result_->outcome;
   }
@@ -324,7 +339,7 @@ std::optional<CommandOutcomeCode> BoardClient::StartBound(CommandCode code,
   // The board's first frame of the motion follows its answer at once.
   const std::chrono::milliseconds second{1000};
   WaitEnd end{};
-  if (!Await([&] { return confirmed_; }, {second, second}, &end, why)) {
+  if (!Await([&] { return confirmed_; }, {second, ExchangeSilence(second)}, &end, why)) {
     if (end == WaitEnd::kBoardTime) {
       Mismatch("node " + std::to_string(node_) +
                " accepted the start but did not say what it runs (no MotionConfig "
@@ -377,7 +392,7 @@ std::optional<ParamValue> BoardClient::AskParam(const Request& request, ParamId 
   const auto answered = [&] { return last_param_ && last_param_->id == id; };
   const std::chrono::milliseconds timeout{timeout_ms};
   WaitEnd end{};
-  if (!Await(answered, {timeout, timeout}, &end, why)) {
+  if (!Await(answered, {timeout, ExchangeSilence(timeout)}, &end, why)) {
     if (end == WaitEnd::kBoardTime) {
       *why = "node " + std::to_string(node_) + " talks but did not answer " + what +
              " within " + std::to_string(timeout_ms) + " ms of its own time";

@@ -48,7 +48,8 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
     WaitEnd end{};
     const std::chrono::milliseconds second{1000};
     if (*outcome == CommandOutcomeCode::kRefusedNotIdle &&
-        board.Await([&] { return board.status().heard; }, {second, second}, &end, &why) &&
+        board.Await([&] { return board.status().heard; }, {second, ExchangeSilence(second)},
+                    &end, &why) &&
         board.status().state == BoardState::kFault) {
       return fail(TrialEnd::kRefused, "the board refused the trial: it holds fault " +
                                           DescribeFault(board.status().fault) +

@@ -42,7 +42,7 @@ monitor=$!
   --frequency-hz 0.5 --rest-s 0.2 --out "$work/trial" --no-figure >"$work/trial.out" 2>"$work/trial.err" &
 trial=$!
 wait_receivers $((base + 3))  # candump, monitor, trial
-check "the trial runs" wait_for "$work/trial.err" "repetition 1/20"
+check "the trial runs" wait_for "$work/trial.err" "repetition 1/20" "$trial"
 
 cansend vcan0 20000040#0000000000000000  # CAN_ERR_FLAG | CAN_ERR_BUSOFF
 wait "$trial"

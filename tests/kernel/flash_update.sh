@@ -100,7 +100,8 @@ wait_receivers $((base + 1))
 # PERMILLE: waits until node 2's last BootStatus reports at least that much programmed.
 wait_progress() {
   local i line data
-  for ((i = 0; i < ${MJC_WAIT_CAP_S:-300} * 20; i++)); do
+  local end=$((SECONDS + ${MJC_WAIT_CAP_S:-300}))
+  while ((SECONDS < end)); do
     line=
     while IFS= read -r l; do line=$l; done <progress2.log
     data=${line##*#}

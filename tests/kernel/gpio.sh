@@ -37,8 +37,8 @@ dbg=/sys/kernel/debug/$chip
 # "consumer" as gpioinfo shows it on LINE (an offset) of the test chip, or "unused".
 holder() { gpioinfo "$chip" | awk -v l="$1" '$1 == "line" && $2 == l":" { print $4; exit }'; }
 wait_holder() {  # LINE TEXT: until gpioinfo shows TEXT as LINE's consumer
-  local i
-  for ((i = 0; i < ${MJC_WAIT_CAP_S:-300} * 20; i++)); do
+  local end=$((SECONDS + ${MJC_WAIT_CAP_S:-300}))
+  while ((SECONDS < end)); do
     [[ $(holder "$1") == "$2" ]] && return 0
     sleep 0.05
   done
@@ -50,8 +50,8 @@ one_line() { [[ $(wc -l <"$1") -eq 1 ]] && grep -qF -- "$2" "$1"; }
 # Frames of ID (3 hex digits) with data starting DATA logged in the bus log.
 frames() { grep -c " $1#$2" "$work/bus.log"; }
 wait_frames() {  # ID DATA COUNT: until COUNT such frames are logged
-  local i
-  for ((i = 0; i < ${MJC_WAIT_CAP_S:-300} * 20; i++)); do
+  local end=$((SECONDS + ${MJC_WAIT_CAP_S:-300}))
+  while ((SECONDS < end)); do
     (($(frames "$1" "$2") >= $3)) && return 0
     sleep 0.05
   done
@@ -59,8 +59,8 @@ wait_frames() {  # ID DATA COUNT: until COUNT such frames are logged
   return 1
 }
 fault_after() {  # T ID FAULT: until a frame ID logged after time T has FAULT in bytes 2-3
-  local i
-  for ((i = 0; i < ${MJC_WAIT_CAP_S:-300} * 20; i++)); do
+  local end=$((SECONDS + ${MJC_WAIT_CAP_S:-300}))
+  while ((SECONDS < end)); do
     awk -v t="$1" -v id="$2#" -v f="$3" '{ gsub(/[()]/, "", $1) }
       $1 > t && index($3, id) == 1 && substr($3, length(id) + 5, 4) == f { found = 1; exit }
       END { exit !found }' "$work/bus.log" && return 0

@@ -56,8 +56,8 @@ first_after() {  # T ID DATA: the timestamp of the first such frame logged after
     $1 > t && index($3, want) == 1 { print $1; exit }' "$work/bus.log"
 }
 wait_after() {  # T ID DATA: waits until such a frame is logged after T (cap as wait_for)
-  local i
-  for ((i = 0; i < ${MJC_WAIT_CAP_S:-300} * 20; i++)); do
+  local end=$((SECONDS + ${MJC_WAIT_CAP_S:-300}))
+  while ((SECONDS < end)); do
     [ -n "$(first_after "$@")" ] && return 0
     sleep 0.05
   done
@@ -75,13 +75,13 @@ start_trial() {  # NAME: a 40 s trial in the background, once two windows are in
     --frequency-hz 0.5 --rest-s 0.2 --no-figure --out "$work/$1" \
     >"$work/$1.out" 2>"$work/$1.err" &
   pid=$!
-  wait_for "$work/$1.err" "repetition 2/20 flexion"
+  wait_for "$work/$1.err" "repetition 2/20 flexion" "$pid"
 }
 start_sweep() {  # NAME: a 80 s sweep in the background, once its second cycle runs
   "$mjc" calibrate --iface vcan0 --node 1 --cycles 40 --frequency-hz 0.5 --no-upload \
     --out "$work/$1" >"$work/$1.out" 2>"$work/$1.err" &
   pid=$!
-  wait_for "$work/$1.err" "[sweep] cycle 2/40"
+  wait_for "$work/$1.err" "[sweep] cycle 2/40" "$pid"
 }
 
 for sig in INT TERM HUP QUIT; do

@@ -44,8 +44,8 @@ first_after() {  # T ID DATA
     $1 > t && index($3, want) == 1 { print $1; exit }' "$work/bus.log"
 }
 wait_after() {  # T ID DATA: waits until such a frame is logged after T (cap as wait_for)
-  local i
-  for ((i = 0; i < ${MJC_WAIT_CAP_S:-300} * 20; i++)); do
+  local end=$((SECONDS + ${MJC_WAIT_CAP_S:-300}))
+  while ((SECONDS < end)); do
     [ -n "$(first_after "$@")" ] && return 0
     sleep 0.05
   done
@@ -55,7 +55,7 @@ start_trial() {  # OUT: a 40 s trial in the background, once its first window is
   "$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 20 \
     --frequency-hz 0.5 --rest-s 0.2 --out "$work/$1" >"$work/$1.out" 2>"$work/$1.err" &
   trial=$!
-  wait_for "$work/$1.err" "repetition 1/20"
+  wait_for "$work/$1.err" "repetition 1/20" "$trial"
 }
 
 # SIGNAL PID TOOL WHAT CSV ERR [TAIL]: interrupts TOOL (mjc trial, mjc calibrate),

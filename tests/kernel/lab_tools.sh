@@ -122,7 +122,7 @@ check "mjc param dump of node 2" "$mjc" param dump --iface vcan0 --node 2 -o par
 "$mjc" trial --iface vcan0 --node 2 --protocol amplitude --amplitudes 10 --reps 50 \
   --frequency-hz 0.5 --rest-s 0.2 --out long --no-figure >long.out 2>long.err &
 long=$!
-check "a long trial runs on node 2" wait_for long.err "repetition 1/50"
+check "a long trial runs on node 2" wait_for long.err "repetition 1/50" "$long"
 check "mjc param restore refuses while it runs: exit 4, one line" \
   refuses 4 busy.err "$mjc" param restore --iface vcan0 --node 2 params2.json
 check "  saying why; nothing sent" grep -qx \

@@ -16,8 +16,8 @@ count_receivers() {
 }
 
 wait_receivers() {  # COUNT: wait until at least COUNT are registered (cap as wait_for)
-  local i
-  for ((i = 0; i < ${MJC_WAIT_CAP_S:-300} * 20; i++)); do
+  local end=$((SECONDS + ${MJC_WAIT_CAP_S:-300}))
+  while ((SECONDS < end)); do
     count_receivers
     ((receivers >= $1)) && return 0
     sleep 0.05

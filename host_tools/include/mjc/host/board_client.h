@@ -88,6 +88,12 @@ inline constexpr std::chrono::milliseconds kHostHeartbeatPeriod{100};
 // its slowdown there. A value outside the range is ignored (10 s).
 std::chrono::milliseconds DefaultSilence();
 
+// The wall-clock silence for an exchange a board answers within TIMEOUT of its own time
+// (a command, a parameter, the start of a motion): TIMEOUT itself, since a real board
+// that says nothing for that long is gone; no shorter than MJC_SILENCE_S when that is
+// set, for a simulated board starved of CPU in a test VM.
+std::chrono::milliseconds ExchangeSilence(std::chrono::milliseconds timeout);
+
 struct Patience {
   // Board time the wait may take, read off its heartbeat's tick counter (counted from
   // the first heartbeat the wait sees); 0 = no bound beyond silence.
