@@ -115,7 +115,7 @@ void AddEstop(CLI::App& app) {
       report(watch.Poll(std::chrono::milliseconds(20), &why));
       for (;;) {
         const host::ReceiveResult r = link->Receive(0, &why);
-        if (r.status == host::ReceiveStatus::kError) throw Failure(why);
+        if (r.failed()) throw Failure(why);
         if (!r) break;
         protocol::FaultEvent e;
         if (protocol::Decode(r->frame, &e) != protocol::DecodeError::kOk ||

@@ -191,7 +191,7 @@ void RecordBus(const Options& o) {
   // Writes the next frame that arrives within timeout_ms; false when none did.
   const auto record = [&](int timeout_ms) {
     const auto r = link->Receive(timeout_ms, &why);
-    link_failed = r.status == host::ReceiveStatus::kError;
+    link_failed = r.failed();
     if (!r) return false;
     gaps.Take(r->frame);
     if (o.format == "csv") {

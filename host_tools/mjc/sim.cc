@@ -312,6 +312,7 @@ void AddSim(CLI::App& app) {
     double lost_s = 0;  // wall time the board fell behind its speed, in all
     bool warned = false;
     std::uint32_t bus_off_seen = 0;
+    bool down = false;  // the interface, as last said
     while (!stop && (seconds == 0 || static_cast<double>(ticks) * period < seconds)) {
       // The main loop's pass once a millisecond of board time: under emulation each
       // read of the socket is a system call, and reading it every 100 µs tick cost
@@ -335,6 +336,18 @@ void AddSim(CLI::App& app) {
         if (!nrst_why.empty()) throw Failure("reset line: " + nrst_why);
         board.Poll();
         if (port.failed()) throw Failure(port.error());
+        // An interface taken down and up again (ip link set ... down): the board rides
+        // through it without its bus, as a real one whose cable is pulled; a motion
+        // stops on its host timeout (fault 302).
+        if (port.down() != down) {
+          down = port.down();
+          std::fprintf(stderr,
+                       down
+                           ? "mjc sim: %s went down at %.4f s: the board goes on without "
+                             "its bus\n"
+                           : "mjc sim: %s is up again at %.4f s\n",
+                       iface.c_str(), static_cast<double>(ticks) * period);
+        }
         if (board.in_application() != in_application) {
           // Another image, another pace (at --speed 0), and the counters start anew.
           in_application = board.in_application();

@@ -434,7 +434,7 @@ bool BoardClient::Poll(int timeout_ms, std::string* why) {
     const bool arrived = static_cast<bool>(r);
     for (; r; r = link_->Receive(0, why)) Handle(r->frame);
     NoteBusOff();
-    if (r.status == ReceiveStatus::kError) {
+    if (r.failed()) {
       link_failed_ = true;
       return false;
     }

@@ -77,7 +77,7 @@ ScanEnd ScanBus(CanLink& link, BusScan* scan, std::chrono::milliseconds silence,
     if (scan->Complete()) return ScanEnd::kComplete;
     if (interrupt != nullptr && *interrupt) return ScanEnd::kInterrupted;
     const ReceiveResult r = link.Receive(20, why);
-    if (r.status == ReceiveStatus::kError) return ScanEnd::kLinkFailed;
+    if (r.failed()) return ScanEnd::kLinkFailed;
     const auto now = std::chrono::steady_clock::now();
     if (r) {
       heard = now;

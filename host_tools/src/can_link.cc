@@ -203,6 +203,10 @@ ReceiveResult SocketCanLink::DoReceive(int timeout_ms, std::string* why) {
     message.msg_controllen = sizeof control;
     const ssize_t n = ::recvmsg(fd_, &message, 0);
     if (n < 0) {
+      if (errno == ENETDOWN) {
+        Say(why, "'" + interface_ + "' went down");
+        return {ReceiveStatus::kDown, {}};
+      }
       if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
         Say(why, Errno("cannot receive on '" + interface_ + "'"));
         return {ReceiveStatus::kError, {}};

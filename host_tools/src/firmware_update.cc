@@ -193,7 +193,7 @@ bool FirmwareUpdate::Pump(int timeout_ms) {
   std::string why;
   ReceiveResult r = link_->Receive(timeout_ms, &why);
   for (; r; r = link_->Receive(0, &why)) Handle(r->frame);
-  if (r.status == ReceiveStatus::kError) {
+  if (r.failed()) {
     link_failed_ = true;
     link_why_ = why;
     return false;

@@ -48,8 +48,8 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
     WaitEnd end{};
     const std::chrono::milliseconds second{1000};
     if (*outcome == CommandOutcomeCode::kRefusedNotIdle &&
-        board.Await([&] { return board.status().heard; }, {second, ExchangeSilence(second)},
-                    &end, &why) &&
+        board.Await([&] { return board.status().heard; },
+                    {second, ExchangeSilence(second)}, &end, &why) &&
         board.status().state == BoardState::kFault) {
       return fail(TrialEnd::kRefused, "the board refused the trial: it holds fault " +
                                           DescribeFault(board.status().fault) +
@@ -75,7 +75,12 @@ BoardTrial RunBoardTrial(BoardClient& board, const TrialConfig& config,
   if (!board.AwaitMotionEnd(BoardState::kRunning, take_windows, patience, &end, &why)) {
     switch (end) {
       case WaitEnd::kLinkFailed:
-        return fail(TrialEnd::kLinkFailed, why);
+        // Nothing can reach the board now; it stops on its own once our heartbeats
+        // stay away for its host timeout.
+        return fail(TrialEnd::kLinkFailed,
+                    why + " during the trial; node " + std::to_string(board.node()) +
+                        " stops the motion itself when it misses this host's heartbeats "
+                        "(fault 302)");
       case WaitEnd::kInterrupted:
         return fail(TrialEnd::kInterrupted, why);
       case WaitEnd::kAmbiguous:

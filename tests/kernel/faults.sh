@@ -13,6 +13,8 @@
 #   - mjc clear clears the fault (its cause is gone) and the next trial completes.
 # A cause that stays: the joint encoder flags an error (the board's SIGUSR1); mjc clear
 # is refused (exit 4, naming fault 101) until the flag is gone, then accepted.
+# The interface down for two seconds mid-trial: the board rides through and faults 302;
+# once it is up, mjc clear and the next trial work.
 # The board is `mjc sim`, or the one MJC_BOARD names (board.sh).
 # usage: [MJC_BOARD=<board command>] faults.sh <path of mjc>
 set -u
@@ -89,13 +91,49 @@ check "the encoder recovers" wait_for "$work/sim.err" "joint encoder error flag 
 check_exit $? 0 "once it is gone, mjc clear exits 0"
 check "and says what it cleared" grep -q "node 1: fault 101 (joint encoder error flag) cleared" "$work/cleared.out"
 
+codes=$(sed -n 's/.* 011#\(....\).*/\1/p' "$work/fault.log" | tr '\n' ' ')
+check "the board sent two Fault frames, 303 then 101 (codes $codes)" test "$codes" = "2F01 6500 "
+
+# The interface down for two seconds mid-trial, then up (a cable pulled and plugged back;
+# `ip link set vcan0 down`): the board rides through without its bus and stops the
+# orphaned motion on its host timeout (fault 302); mjc trial ends saying the link went
+# down; once it is up, the board answers, mjc clear clears 302 and a trial completes.
+"$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 20 \
+  --frequency-hz 0.5 --rest-s 0.2 --out "$work/down" --no-figure >"$work/down.out" 2>"$work/down.err" &
+trial=$!
+check "a trial runs before the link goes down" wait_for "$work/down.err" "repetition 1/20" "$trial"
+ip link set vcan0 down
+sleep 2  # the outage itself, not a wait for an outcome
+ip link set vcan0 up
+wait "$trial"
+check_exit $? 1 "mjc trial ends with exit 1, its link gone"
+# (Its receive says the interface went down, or a heartbeat's send found it down first.)
+check "  saying the interface went down" grep -qE "'vcan0' (went down|.*Network is down)" "$work/down.err"
+check "  and that the board stops the motion itself" \
+  grep -q "node 1 stops the motion itself when it misses this host's heartbeats (fault 302)" "$work/down.err"
+check "the board said it went down" wait_for "$work/sim.err" "$board_name: vcan0 went down at"
+check "  and up again" wait_for "$work/sim.err" "$board_name: vcan0 is up again at"
+check "  and is still running" kill -0 "$sim"
+# The orphaned motion's stop comes a host timeout of the board's time after the last
+# heartbeat, which a board slower than real time may reach only after the outage.
+"$mjc" monitor --iface vcan0 --node 1 --interval-ms 200 >"$work/orphan.out" 2>&1 &
+monitor=$!
+check "the board stopped the orphaned motion: fault 302" \
+  wait_for "$work/orphan.out" "fault 302 (host heartbeat lost)" "$monitor"
+kill -INT "$monitor"
+wait "$monitor"
+"$mjc" clear --iface vcan0 --node 1 >"$work/clear3.out" 2>"$work/clear3.err"
+check_exit $? 0 "mjc clear exits 0 once the link is up"
+check "  clearing the orphaned motion's fault 302" grep -q "node 1: fault 302 (host heartbeat lost) cleared" "$work/clear3.out"
+"$mjc" trial --iface vcan0 --node 1 --protocol amplitude --amplitudes 15 --reps 3 \
+  --frequency-hz 2 --rest-s 0.2 --out "$work/after_down" --no-figure >"$work/after_down.out" 2>"$work/after_down.err"
+check_exit $? 0 "a trial completes after the outage"
+
 kill -INT "$sim"
 wait "$sim"
 kill "$dumper" 2>/dev/null
 wait "$dumper" 2>/dev/null
 check "the board counted one bus-off" grep -q "bus-off 1$" "$work/sim.err"
-codes=$(sed -n 's/.* 011#\(....\).*/\1/p' "$work/fault.log" | tr '\n' ' ')
-check "and sent two Fault frames, 303 then 101 (codes $codes)" test "$codes" = "2F01 6500 "
 
 finish "$work/sim.err" "$work/trial.err" "$work/monitor.out" "$work/monitor.err" \
-  "$work/fault.log" "$work/clear.out" "$work/clear.err"
+  "$work/fault.log" "$work/clear.out" "$work/clear.err" "$work/down.err" "$work/clear3.err"

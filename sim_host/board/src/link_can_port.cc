@@ -4,7 +4,10 @@ namespace mjc::sim {
 
 bool LinkCanPort::DoSend(const protocol::CanFrame& frame) {
   std::string why;
-  if (link_->Send(frame, &why)) return true;
+  if (link_->Send(frame, &why)) {
+    down_ = false;  // up again
+    return true;
+  }
   // The link already waited for room (ENOBUFS): the frame is lost, counted, and the
   // board goes on, as a controller whose frame never gets on the bus.
   ++send_failures_;
@@ -12,17 +15,33 @@ bool LinkCanPort::DoSend(const protocol::CanFrame& frame) {
   return true;
 }
 
+bool LinkCanPort::Judge(const host::ReceiveResult& r, const std::string& why) {
+  switch (r.status) {
+    case host::ReceiveStatus::kFrame:
+      down_ = false;  // up again
+      return true;
+    case host::ReceiveStatus::kTimeout:
+      return false;
+    case host::ReceiveStatus::kDown:
+      // The socket stays bound; frames come again once the interface is up.
+      if (!down_) ++times_down_;
+      down_ = true;
+      error_ = why;
+      return false;
+    case host::ReceiveStatus::kError:
+      break;
+  }
+  failed_ = true;
+  error_ = why;
+  return false;
+}
+
 bool LinkCanPort::WaitForFrame(int timeout_ms) {
   if (waiting_) return true;
   if (failed_) return false;
   std::string why;
   const host::ReceiveResult r = link_->Receive(timeout_ms, &why);
-  if (r.status == host::ReceiveStatus::kError) {
-    failed_ = true;
-    error_ = why;
-    return false;
-  }
-  if (!r) return false;
+  if (!Judge(r, why)) return false;
   waiting_ = r->frame;
   return true;
 }
@@ -37,12 +56,7 @@ bool LinkCanPort::DoReceive(protocol::CanFrame* frame) {
   if (failed_) return false;
   std::string why;
   const host::ReceiveResult r = link_->Receive(0, &why);
-  if (r.status == host::ReceiveStatus::kError) {
-    failed_ = true;
-    error_ = why;
-    return false;
-  }
-  if (!r) return false;
+  if (!Judge(r, why)) return false;
   *frame = r->frame;
   ++received_;
   return true;

@@ -210,7 +210,11 @@ void VirtualBoard::OnTransmit(const g474model::CanBusFrame& f) {
   std::string why;
   // The link already waited for room: the frame is lost, counted, as a controller's
   // frame that never gets on the bus.
-  if (!link_->Send(frame, &why)) ++send_failures_;
+  if (link_->Send(frame, &why)) {
+    link_down_ = false;  // up again
+  } else {
+    ++send_failures_;
+  }
 }
 
 void VirtualBoard::PollLink() {
@@ -222,7 +226,12 @@ void VirtualBoard::PollLink() {
     if (r.status == host::ReceiveStatus::kError) {
       throw std::runtime_error(config_.iface + ": " + why);
     }
+    if (r.status == host::ReceiveStatus::kDown) {
+      link_down_ = true;  // the socket stays bound: frames come once it is up again
+      break;
+    }
     if (!r) break;
+    link_down_ = false;
     g474model::CanBusFrame f;
     f.id = r->frame.id;
     f.fd = r->frame.fd || r->flags != 0;
@@ -319,6 +328,15 @@ void VirtualBoard::Report() {
       // over the command line's.
       Say("node %d on %s (%s)", fw->node().config().node, config_.iface.c_str(),
           config_.description.c_str());
+    }
+  }
+  if (link_down_ != down_reported_) {
+    down_reported_ = link_down_;
+    if (link_down_) {
+      Say("%s went down at %.4f s: the board goes on without its bus",
+          config_.iface.c_str(), Seconds(chip_->now()));
+    } else {
+      Say("%s is up again at %.4f s", config_.iface.c_str(), Seconds(chip_->now()));
     }
   }
   for (; bus_off_reported_ < fw->node().counters().bus_off; ++bus_off_reported_) {

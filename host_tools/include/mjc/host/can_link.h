@@ -38,6 +38,10 @@ enum class ReceiveStatus : std::uint8_t {
   kFrame = 0,    // a frame arrived
   kTimeout = 1,  // none within the timeout
   kError = 2,    // the socket failed (the reason is in `why`)
+  // The interface went down (ENETDOWN, once, as the kernel reports it; the reason is in
+  // `why`). The socket stays bound: nothing arrives until the interface is up again,
+  // and then frames do. A board rides through it; a tool takes it as the link failing.
+  kDown = 3,
 };
 
 // What Receive returns: a frame, or why there is none. Tests true only for a frame; *
@@ -47,6 +51,10 @@ struct ReceiveResult {
   ReceivedFrame received;
 
   explicit operator bool() const { return status == ReceiveStatus::kFrame; }
+  // The link failed or went down: for a tool, the end of its exchange with the board.
+  bool failed() const {
+    return status == ReceiveStatus::kError || status == ReceiveStatus::kDown;
+  }
   const ReceivedFrame& operator*() const { return received; }
   const ReceivedFrame* operator->() const { return &received; }
 };

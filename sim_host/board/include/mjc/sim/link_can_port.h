@@ -19,12 +19,16 @@ class LinkCanPort final : public hal::CanPort {
   explicit LinkCanPort(host::CanLink* link)
       : link_(link), bus_off_seen_(link->stats().bus_off) {}
 
-  // Once the link failed (the interface went away): why. The port then receives
-  // nothing; the owner should stop.
+  // Once the link failed (the interface went away, not only down): why. The port then
+  // receives nothing; the owner should stop.
   bool failed() const { return failed_; }
   const std::string& error() const { return error_; }
   // Frames the link could not send (each one lost, as a controller that gives up).
   std::uint32_t send_failures() const { return send_failures_; }
+  // The interface is down (the link said so, and no frame has come or gone since): the
+  // board rides through, as a real one whose bus is unplugged. Times it went down.
+  bool down() const { return down_; }
+  std::uint32_t times_down() const { return times_down_; }
 
   // Waits up to timeout_ms for a frame, kept for the next Receive: true when one is
   // there. For a board with nothing to do until a frame comes (the simulated
@@ -35,6 +39,8 @@ class LinkCanPort final : public hal::CanPort {
   bool DoSend(const protocol::CanFrame& frame) override;
   bool DoReceive(protocol::CanFrame* frame) override;
   std::uint32_t DoTakeBusOff() override;
+  // True for a frame; otherwise notes the link down or failed.
+  bool Judge(const host::ReceiveResult& r, const std::string& why);
   hal::CanPortCounters DoCounters() const override;
 
   host::CanLink* link_;
@@ -43,6 +49,8 @@ class LinkCanPort final : public hal::CanPort {
   std::uint32_t received_ = 0;
   std::uint32_t send_failures_ = 0;
   bool failed_ = false;
+  bool down_ = false;
+  std::uint32_t times_down_ = 0;
   std::string error_;
 };
 

@@ -190,6 +190,9 @@ class VirtualBoard {
   bool announced_ = false;
   bool boot_reported_ = false;
   std::uint32_t bus_off_reported_ = 0;
+  // The interface is down (ENETDOWN, until a frame comes or goes again): the board rides
+  // through without its bus; `down_reported_` is what was last said of it.
+  bool link_down_ = false, down_reported_ = false;
   int resets_ = 0;
   std::uint64_t ticks_since_start_ = 0;  // tick interrupts since the last (re)start
   std::function<void(const plant::Plant&, std::uint32_t)> step_observer_;
