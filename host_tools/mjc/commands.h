@@ -48,8 +48,8 @@ enum class Exit : int {
   kFaulted = 5,     // the board faulted while carrying it out
   kStopped = 6,     // the motion ended before its end: interrupted here (a signal; the
                     // board was told to stop) or stopped by another tool
-  kAmbiguous = 7,   // two boards answer with one node id: nothing was done to it (a
-                    // motion already running was stopped)
+  kAmbiguous = 7,   // two boards answer with one node id, or one frame showed a sign of
+                    // it: nothing was done to it (a motion already running was stopped)
   kNotUpdated = 8,  // mjc flash: a board caught for an update does not run the new
                     // image (named; usually left in its bootloader, which waits for an
                     // image: run mjc flash again)
@@ -63,7 +63,8 @@ inline constexpr const char* kExitStatusHelp =
     "calibration or did not keep what was sent; 5 the board faulted; 6 the motion was "
     "stopped before its end (interrupted: the board was stopped and what arrived is "
     "saved; stopped by another tool; or by the emergency stop); 7 two boards answer "
-    "with one node id (nothing was done to it; give each board its own id); 8 mjc flash: "
+    "with one node id, or a frame showed a sign of it (nothing was done to it; give "
+    "each board its own id); 8 mjc flash: "
     "a board was not updated (named; it waits "
     "in its bootloader: run mjc flash again).\n"
     "Defaults: --iface from MJC_IFACE, else the config file's \"iface\", else vcan0; "

@@ -59,9 +59,14 @@ using protocol::SessionId;
 
 void BoardIdentity::OnInfo(const BoardInfo& info) {
   info_since_heartbeat_ = true;
+  ++infos_;
   const std::uint16_t id = info.instance;
-  if (std::find(instances_.begin(), instances_.end(), id) == instances_.end()) {
+  const auto known = std::find(instances_.begin(), instances_.end(), id);
+  if (known == instances_.end()) {
     instances_.push_back(id);
+    infos_heard_.push_back(1);
+  } else {
+    ++infos_heard_[static_cast<std::size_t>(known - instances_.begin())];
   }
   if (!current_) {
     current_ = id;
@@ -70,7 +75,7 @@ void BoardIdentity::OnInfo(const BoardInfo& info) {
     // before the first was judged: two boards.
     if (std::find(retired_.begin(), retired_.end(), id) != retired_.end() ||
         (new_ && *new_ != id)) {
-      ambiguous_ = true;
+      Sign(id);
     }
     new_ = id;
   }
@@ -87,7 +92,7 @@ void BoardIdentity::OnHeartbeat(std::uint32_t tick) {
       retired_.push_back(*current_);
       current_ = new_;
     } else {
-      ambiguous_ = true;
+      Sign(*new_);
     }
     new_.reset();
   } else if (reversed && !info_since_heartbeat_ && ++clock_reversals_ >= 2) {
@@ -101,8 +106,37 @@ void BoardIdentity::OnHeartbeat(std::uint32_t tick) {
   tick_ = tick;
 }
 
+void BoardIdentity::Sign(std::uint16_t instance) {
+  if (!ambiguous_) {
+    if (current_) sign_ = {instance, *current_};
+    infos_at_sign_ = infos_;
+  }
+  ambiguous_ = true;
+}
+
+bool BoardIdentity::proven() const {
+  if (!ambiguous_) return false;
+  const auto repeated = std::count_if(infos_heard_.begin(), infos_heard_.end(),
+                                      [](int n) { return n >= 2; });
+  return repeated >= 2 || clock_reversals_ >= 2;
+}
+
 std::string BoardIdentity::Message(int node) const {
   if (!ambiguous_) return "";
+  if (!proven() && sign_) {
+    // One BoardInfo of a second instance (a clock stepping back is ambiguous only when
+    // repeated, and then proof): say what it was, not more.
+    const auto hex4 = [](std::uint16_t v) {
+      char text[8];
+      std::snprintf(text, sizeof text, "%04x", v);
+      return std::string(text);
+    };
+    return "node " + std::to_string(node) +
+           " showed a sign of a second board on its node id (a BoardInfo of instance " +
+           hex4(sign_->first) + " amid " + hex4(sign_->second) +
+           "'s): seen once, which a stray or corrupted frame can also cause (mjc list "
+           "shows every board on the bus)";
+  }
   std::string who;
   if (instances_.size() >= 2) {
     who = "instances ";
@@ -143,7 +177,7 @@ BoardClient::BoardClient(CanLink* link, std::uint8_t node, HostHeartbeats heartb
 }
 
 bool BoardClient::Await(const std::function<bool()>& done, const Patience& patience,
-                        WaitEnd* end, std::string* why) {
+                        WaitEnd* end, std::string* why, bool stop_at_a_sign) {
   const auto end_with = [&](WaitEnd e, std::string what) {
     *end = e;
     *why = std::move(what);
@@ -156,8 +190,9 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
   std::optional<std::uint32_t> first_tick;
   const auto board_ticks =
       static_cast<std::uint64_t>(patience.board.count()) * protocol::kBoardTickHz / 1000u;
+  const auto stop = [&] { return ambiguous() && (stop_at_a_sign || proven_ambiguous()); };
   for (;;) {
-    if (ambiguous()) return end_with(WaitEnd::kAmbiguous, AmbiguityMessage());
+    if (stop()) return end_with(WaitEnd::kAmbiguous, AmbiguityMessage());
     if (motion_mismatch()) return end_with(WaitEnd::kWrongMotion, mismatch_);
     if (done()) return true;
     if (interrupted()) return end_with(WaitEnd::kInterrupted, "interrupted");
@@ -165,7 +200,7 @@ bool BoardClient::Await(const std::function<bool()>& done, const Patience& patie
       *end = WaitEnd::kLinkFailed;
       return false;
     }
-    if (ambiguous()) return end_with(WaitEnd::kAmbiguous, AmbiguityMessage());
+    if (stop()) return end_with(WaitEnd::kAmbiguous, AmbiguityMessage());
     if (motion_mismatch()) return end_with(WaitEnd::kWrongMotion, mismatch_);
     if (done()) return true;
     const auto now = now_();
@@ -212,9 +247,25 @@ bool BoardClient::Identify(WaitEnd* end, std::string* why,
   constexpr auto kTicks = static_cast<std::uint32_t>(kBoardInfoPeriod.count() * 11 / 10 *
                                                      protocol::kBoardTickHz / 1000);
   const std::uint64_t start = identity_.elapsed_ticks();
-  const auto shown = [&] { return identity_.elapsed_ticks() - start >= kTicks; };
+  // A sign of a second board (one frame) is judged before anything is done: proven once
+  // both instances were heard twice, a sign once five more BoardInfo frames came.
+  const auto shown = [&] {
+    if (identity_.ambiguous()) {
+      return identity_.proven() || identity_.infos_since_sign() >= 5;
+    }
+    return identity_.elapsed_ticks() - start >= kTicks;
+  };
   // The board time bound is the condition itself.
-  return Await(shown, Patience{std::chrono::milliseconds{0}, silence}, end, why);
+  if (!Await(shown, Patience{std::chrono::milliseconds{0}, silence}, end, why,
+             /*stop_at_a_sign=*/false)) {
+    return false;
+  }
+  if (ambiguous()) {
+    *end = WaitEnd::kAmbiguous;
+    *why = AmbiguityMessage();
+    return false;
+  }
+  return true;
 }
 
 std::optional<CommandOutcomeCode> BoardClient::Command(CommandCode code, int timeout_ms,

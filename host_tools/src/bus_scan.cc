@@ -59,12 +59,14 @@ void BusScan::Handle(const CanFrame& f) {
   for (const auto& [instance, count] : n.infos) most_infos = std::max(most_infos, count);
   n.shown = n.shown || most_infos >= 3 || n.identity.heartbeats() >= 30 ||
             n.identity.elapsed_ticks() >= (n.bootloader_clock ? kBootTicks : kTicks);
+  n.judged = !n.identity.ambiguous() || n.identity.proven() ||
+             n.identity.infos_since_sign() >= 5;
 }
 
 bool BusScan::Complete() const {
   if (nodes_.empty()) return false;
   for (const auto& [node, n] : nodes_) {
-    if (!n.shown) return false;
+    if (!n.shown || !n.judged) return false;
   }
   return true;
 }

@@ -584,16 +584,44 @@ TEST_F(TwoBoards, OneBoardIsOneBoard) {
 }
 
 TEST_F(TwoBoards, TwoInstancesWhileNeitherRestartedAreTwoBoards) {
-  // Started together: their clocks agree, only their BoardInfo tells them apart.
+  // Started together: their clocks agree, only their BoardInfo tells them apart. The
+  // first BoardInfo of the second is a sign (a motion stops); its second, the proof.
   Info(0x3f2a);
   Beat(50000);
   Info(0x9b01);
   Beat(50010);
   EXPECT_TRUE(Ambiguous());
+  Info(0x3f2a);
+  Beat(51000);
+  Info(0x9b01);
+  Beat(51010);
+  EXPECT_TRUE(Ambiguous());
   EXPECT_EQ(client_.AmbiguityMessage(),
             "node 1 is answered by two boards (instances 3f2a and 9b01): give each its "
             "own node id");
   // Every wait ends at once, saying so.
+  WaitEnd end{};
+  EXPECT_FALSE(client_.Await([] { return true; }, {}, &end, &why_));
+  EXPECT_EQ(end, WaitEnd::kAmbiguous);
+  EXPECT_EQ(why_, client_.AmbiguityMessage());
+}
+
+TEST_F(TwoBoards, OneStrayBoardInfoIsASignNotAProof) {
+  // A frame of a flooded bus that decodes as a BoardInfo of another instance, amid one
+  // board's steady heartbeats: every wait ends at once (a motion stops on the first
+  // sign), and the message says what was seen, not that there are two boards.
+  Info(0x3f2a);
+  for (std::uint32_t t = 50000; t < 53000; t += 1000) Beat(t);
+  Info(0x3f2a);
+  Beat(53000);
+  Info(0x77c5);
+  Beat(54000);
+  Beat(55000);
+  EXPECT_TRUE(Ambiguous());
+  EXPECT_EQ(client_.AmbiguityMessage(),
+            "node 1 showed a sign of a second board on its node id (a BoardInfo of "
+            "instance 77c5 amid 3f2a's): seen once, which a stray or corrupted frame can "
+            "also cause (mjc list shows every board on the bus)");
   WaitEnd end{};
   EXPECT_FALSE(client_.Await([] { return true; }, {}, &end, &why_));
   EXPECT_EQ(end, WaitEnd::kAmbiguous);
@@ -610,9 +638,20 @@ TEST_F(TwoBoards, ARestartIntoANewInstanceIsNotASecondBoard) {
   Beat(1000);
   EXPECT_FALSE(Ambiguous());
   EXPECT_EQ(client_.info()->instance, 0x9b01);
-  // ...unless the old one speaks again.
+  // ...unless the old one speaks again: a sign, named as such.
   Info(0x3f2a);
   EXPECT_TRUE(Ambiguous());
+  EXPECT_EQ(client_.AmbiguityMessage(),
+            "node 1 showed a sign of a second board on its node id (a BoardInfo of "
+            "instance 3f2a amid 9b01's): seen once, which a stray or corrupted frame can "
+            "also cause (mjc list shows every board on the bus)");
+  // Heard again from both: two boards.
+  Beat(2000);
+  Info(0x9b01);
+  EXPECT_TRUE(Ambiguous());
+  EXPECT_EQ(client_.AmbiguityMessage(),
+            "node 1 is answered by two boards (instances 3f2a and 9b01): give each its "
+            "own node id");
 }
 
 TEST_F(TwoBoards, InterleavedClocksWithoutBoardInfoAreTwoBoards) {

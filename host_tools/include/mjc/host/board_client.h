@@ -11,6 +11,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mjc/host/can_link.h"
@@ -168,15 +169,25 @@ class BoardIdentity {
   void OnInfo(const protocol::BoardInfo& info);
   void OnHeartbeat(std::uint32_t tick);
 
+  // A sign of a second board on the node id, from one frame on: a motion stops at the
+  // first one.
   bool ambiguous() const { return ambiguous_; }
+  // Two boards proven by repeated evidence: two instances each heard in at least two
+  // BoardInfo frames, or the node's clock stepping back twice without a restart. One
+  // frame, which a corrupted or stray frame on a flooded bus can also make, is not.
+  bool proven() const;
   // "node 3 is answered by two boards (instances 3f2a and 9b01): give each its own node
-  // id"; empty while not ambiguous().
+  // id" once proven(); while only ambiguous(), what was seen and that it may be a stray
+  // frame; empty while neither.
   std::string Message(int node) const;
   // The BoardInfo last heard (nullopt before one arrives).
   const std::optional<protocol::BoardInfo>& info() const { return info_; }
   // Every instance heard, in the order heard.
   const std::vector<std::uint16_t>& instances() const { return instances_; }
   std::uint64_t heartbeats() const { return heartbeats_; }
+  // BoardInfo frames heard, of every instance, since the first sign of a second board.
+  // Five without proof: a sign only (a second board would have sent two meanwhile).
+  std::size_t infos_since_sign() const { return infos_ - infos_at_sign_; }
   // The tick of the last heartbeat.
   std::uint32_t tick() const { return tick_; }
   // How far the node's clock has run while heard, in ticks: the sum of the steps
@@ -186,12 +197,18 @@ class BoardIdentity {
   std::uint64_t elapsed_ticks() const { return elapsed_; }
 
  private:
+  void Sign(std::uint16_t instance);
+
   std::optional<protocol::BoardInfo> info_;
   // The instance taken as this node's, those that restarted into another, and an
   // instance not yet judged: a restart when the next heartbeat starts its clock anew.
   std::optional<std::uint16_t> current_;
   std::optional<std::uint16_t> new_;
   std::vector<std::uint16_t> instances_;
+  std::vector<int> infos_heard_;  // BoardInfo frames of each of instances_
+  std::size_t infos_ = 0, infos_at_sign_ = 0;
+  // The first sign of a second board: the instance heard, amid the current one's.
+  std::optional<std::pair<std::uint16_t, std::uint16_t>> sign_;
   std::vector<std::uint16_t> retired_;
   bool info_since_heartbeat_ = false;
   int clock_reversals_ = 0;
@@ -282,11 +299,12 @@ class BoardClient {
   bool Poll(int timeout_ms, std::string* why);
 
   // The wait loop every caller shares: Poll until `done()` holds (true), or until the
-  // patience runs out, the link fails, the interrupt flag is raised or the node turns
-  // out to be two boards (false, with *end and *why saying which). `done` may take what
-  // arrived (windows, samples).
+  // patience runs out, the link fails, the interrupt flag is raised or the node shows a
+  // sign of a second board (false, with *end and *why saying which). `done` may take
+  // what arrived (windows, samples). Without `stop_at_a_sign` only proof of a second
+  // board ends it (Identify judges a sign before anything is done).
   bool Await(const std::function<bool()>& done, const Patience& patience, WaitEnd* end,
-             std::string* why);
+             std::string* why, bool stop_at_a_sign = true);
 
   // Follows the motion this client just started (MotionEnd) with Await: true once it
   // is over — status() then says idle or faulted. `each` (may be empty) is called on
@@ -299,13 +317,16 @@ class BoardClient {
   // then sent its BoardInfo) — 110 ms of a real board's time. False when it stays
   // silent, or is two boards (kAmbiguous), with *end and *why saying which. A board
   // that sends no BoardInfo (an older image) is identified all the same, with info()
-  // empty. `silence` as Patience::silence. The tools call it before they act on a node.
+  // empty. A sign of a second board is judged first: five more BoardInfo frames, or
+  // both instances heard twice (proof). `silence` as Patience::silence. The tools call
+  // it before they act on a node.
   bool Identify(WaitEnd* end, std::string* why,
                 std::chrono::milliseconds silence = Patience{}.silence);
 
   // Two or more physical boards answer with this node id (BoardIdentity). Their frames
   // are then indistinguishable, and every wait ends (kAmbiguous).
   bool ambiguous() const { return identity_.ambiguous(); }
+  bool proven_ambiguous() const { return identity_.proven(); }
   std::string AmbiguityMessage() const { return identity_.Message(node_); }
   // The BoardInfo last heard from the node (nullopt before one arrives).
   const std::optional<protocol::BoardInfo>& info() const { return identity_.info(); }

@@ -37,6 +37,10 @@ struct ScannedNode {
   // whose clock does not move). Two boards told apart at once are no exception: the scan
   // goes on while the other nodes' boards may not have spoken yet.
   bool shown = false;
+  // A sign of a second board (one BoardInfo of another instance) has been judged: proven
+  // by both instances heard twice, or left a sign once five more BoardInfo frames came
+  // (a second board would have sent its second meanwhile).
+  bool judged = true;
 
   bool in_bootloader() const {
     return identity.info() && identity.info()->image == protocol::ImageKind::kBootloader;
