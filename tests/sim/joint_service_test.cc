@@ -14,6 +14,7 @@
 #include <memory>
 #include <vector>
 
+#include "hal/sim/sim_flash.h"
 #include "hal/sim/sim_joint_io.h"
 #include "mjc/app/joint_app.h"
 #include "mjc/app/joint_config.h"
@@ -37,12 +38,13 @@ class Reports final : public service::ReportSink {
 
 // The tick on the plant and the main loop's pass, nothing else: no JointBoard, no node.
 struct Rig {
-  Rig(const plant::PlantParams& params, const ControlConfig& config)
+  Rig(const plant::PlantParams& params, const ControlConfig& config,
+      app::CalibrationStore* store = nullptr)
       : period_s(1.0 / config.tick_hz),
         plant(std::make_unique<plant::Plant>(params)),
         io(std::make_unique<hal::SimJointIo>(plant.get())),
         app(std::make_unique<app::JointApp>(config)),
-        service(app.get(), nullptr) {
+        service(app.get(), store) {
     service.Attach(&reports);
   }
   void Run(int ticks) {
@@ -135,6 +137,55 @@ TEST(JointService, TheAttachmentModelAdaptsWithNoTransport) {
               rig.service.last().telemetry.tick, model.stiffness.ToDouble(),
               model.damping.ToDouble(), subject.stiffness_Nm_per_rad,
               subject.damping_Nm_s_per_rad);
+}
+
+// The service keeps a calibration only once the tick applied it, keeps none the tick
+// refused, and hands the kept one to a board that starts again.
+TEST(JointService, SavesWhatTheTickAppliedAndRestoresItAtBoot) {
+  hal::SimFlash flash(8);
+  app::CalibrationStore store(&flash, 3, 7);
+  const plant::PlantParams params = plant::LoadPlantParams("default");
+  const ControlConfig config = app::DefaultJointConfig();
+  protocol::CalibrationRecord record;
+  record.backlash.c_right = Angle::Quantize(0.021);
+  record.backlash.c_left = Angle::Quantize(-0.013);
+  record.sea_stiffness = Stiffness::Quantize(0.6);
+  record.joint_zero_count = 1234;
+  {
+    Rig rig(params, config, &store);
+    EXPECT_FALSE(rig.service.Boot().has_value());  // an empty flash: uncalibrated
+    rig.Run(1);
+    rig.service.Upload(record);
+    EXPECT_FALSE(store.Load().has_value()) << "saved before the tick applied it";
+    rig.Run(2);
+    ASSERT_EQ(rig.Find(Report::Kind::kCalibrationDone), 0);
+    EXPECT_EQ(rig.reports.all[0].calibration, protocol::CalibrationResult::kAccepted);
+    const auto saved = store.Load();
+    ASSERT_TRUE(saved.has_value());
+    EXPECT_EQ(saved->record.backlash.c_right, record.backlash.c_right);
+    EXPECT_EQ(saved->record.backlash.c_left, record.backlash.c_left);
+    EXPECT_EQ(saved->record.sea_stiffness, record.sea_stiffness);
+    EXPECT_EQ(saved->record.joint_zero_count, record.joint_zero_count);
+
+    // A joint zero beyond the encoder's counts: refused, and the store keeps the first.
+    protocol::CalibrationRecord bad = record;
+    bad.joint_zero_count = 0xFFFF;
+    rig.service.Upload(bad);
+    rig.Run(2);
+    ASSERT_EQ(rig.reports.all.size(), 2u);
+    EXPECT_EQ(rig.reports.all[1].calibration, protocol::CalibrationResult::kOutOfRange);
+    EXPECT_EQ(store.Load()->sequence, saved->sequence);
+  }
+  // A board that starts again from the same flash is calibrated at its first tick.
+  Rig rig(params, config, &store);
+  const auto restored = rig.service.Boot();
+  ASSERT_TRUE(restored.has_value());
+  rig.Run(1);
+  EXPECT_TRUE(rig.app->calibrated());
+  EXPECT_EQ(rig.app->config().backlash.c_right, record.backlash.c_right);
+  EXPECT_EQ(rig.app->config().backlash.c_left, record.backlash.c_left);
+  EXPECT_EQ(rig.app->config().sea_stiffness, record.sea_stiffness);
+  EXPECT_EQ(rig.app->config().joint_encoder.zero_offset, record.joint_zero_count);
 }
 
 }  // namespace
