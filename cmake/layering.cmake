@@ -33,3 +33,26 @@ if(TARGET mjc_g474_model)
   # they do not even see the drivers' register tables.
   mjc_forbid_dependency(mjc_g474_model "^mjc_(hal|app|protocol|boot)")
 endif()
+
+# The joint service is the board's main loop around the application: it knows no
+# transport (not the CAN node, not the board that composes them) and, like the
+# application, nothing of the host.
+mjc_forbid_dependency(mjc_service
+  "^mjc_(app$|app_can_node|plant|sim_|scenarios|host|strict_json|hal_stm32g4|g474)")
+
+# The application's core knows neither the main loop around it nor a transport.
+mjc_forbid_dependency(mjc_app_core "^mjc_(service|app_can_node|app$)")
+
+# The CAN node is a transport: it reaches the application only through the service
+# (never links mjc_app_core itself), and never the board that composes it.
+mjc_forbid_dependency(mjc_app_can_node "^mjc_app$")
+foreach(kind LINK_LIBRARIES INTERFACE_LINK_LIBRARIES)
+  get_target_property(direct mjc_app_can_node ${kind})
+  foreach(dep IN LISTS direct)
+    string(REGEX REPLACE "^\\$<LINK_ONLY:(.*)>$" "\\1" dep "${dep}")
+    if(dep STREQUAL "mjc_app_core")
+      message(FATAL_ERROR
+        "layering: mjc_app_can_node must reach mjc_app_core only through mjc_service")
+    endif()
+  endforeach()
+endforeach()

@@ -14,8 +14,8 @@ void CanNode::SendParam(ParamId id, ParamStatus status) {
   protocol::ParamValue reply;
   reply.id = id;
   reply.status = status;
-  ControlConfig control = app_->config();
-  bool calibrated = app_->Latest().calibrated;
+  ControlConfig control = service_->control();
+  bool calibrated = service_->Latest().calibrated;
   (void)ReadParam(id, {&config_, &control, &calibrated}, &reply.value);
   Send(reply);
 }
@@ -26,12 +26,6 @@ void CanNode::RefuseParam(ParamId id, ParamStatus status, std::int32_t bound) {
   reply.status = status;
   reply.value = bound;
   Send(reply);
-}
-
-bool CanNode::MotionRuns() const {
-  const JointApp::Snapshot last = app_->Latest();
-  return last.state == BoardState::kRunning || last.state == BoardState::kCalibrating ||
-         last.bridge_enabled || start_pending_;
 }
 
 void CanNode::HandleParam(ParamId id, bool write, std::int32_t value) {
@@ -49,10 +43,10 @@ void CanNode::HandleParam(ParamId id, bool write, std::int32_t value) {
                        static_cast<std::int32_t>(info.max_raw));
   }
   // What protects stays as it is while a motion runs: the motion started under it.
-  if (protocol::RefusedWhileMoving(info.access) && MotionRuns()) {
+  if (protocol::RefusedWhileMoving(info.access) && service_->MotionRuns()) {
     return SendParam(id, ParamStatus::kRefusedNotIdle);
   }
-  ControlConfig control = app_->config();
+  ControlConfig control = service_->control();
   CanNodeConfig node = config_;
   bool calibrated = false;
   const ParamFields fields{&node, &control, &calibrated};
@@ -63,24 +57,24 @@ void CanNode::HandleParam(ParamId id, bool write, std::int32_t value) {
   if (info.access == ParamAccess::kNode || info.access == ParamAccess::kGuard) {
     (void)WriteParam(id, value, fields);
     config_ = node;
+    TellSupervision();
     return SendParam(id, ParamStatus::kOk);
   }
   // The control configuration (and the joint's limits, some of which live in it):
   // applied by the tick, which judges it whole and answers.
-  if (config_change_pending_) return SendParam(id, ParamStatus::kRefusedBusy);
+  if (service_->ConfigChangePending()) return SendParam(id, ParamStatus::kRefusedBusy);
   (void)WriteParam(id, value, fields);
   KeepWithinJointLimits(fields);
   if (id == ParamId::kJointTorqueLimit &&
-      control.supervisor.torque_max == app_->config().supervisor.torque_max) {
+      control.supervisor.torque_max == service_->control().supervisor.torque_max) {
     config_ = node;  // torque_max already within: nothing for the tick to apply
     return SendParam(id, ParamStatus::kOk);
   }
-  const RequestTag tag = Tag(Origin::kParam, static_cast<std::uint16_t>(id));
-  const CommandOutcome o = app_->Configure(control, tag);
-  if (o.result != CommandOutcomeCode::kAccepted) return Answer(tag, o);
-  // A tightened joint torque limit holds from now on; the tick applies torque_max.
-  config_ = node;
-  config_change_pending_ = true;
+  // Answered by the service's report (kParamDone): a refusal at once, or the tick's
+  // verdict. A tightened joint torque limit holds from now on (the tick applies
+  // torque_max), unless the configuration was refused at once.
+  service_->Configure(control, id);
+  if (service_->ConfigChangePending()) config_ = node;
 }
 
 }  // namespace mjc::app

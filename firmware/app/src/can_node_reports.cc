@@ -1,76 +1,82 @@
-// What the board reports: the app's events (command verdicts, faults, state changes,
-// window summaries) as frames, the start of each window, and telemetry, its heartbeat
-// and its BoardInfo at their cadences.
+// What the board reports: the service's reports (command verdicts, faults, state
+// changes, window summaries and fits, window starts) as frames, and telemetry, its
+// heartbeat and its BoardInfo at their cadences.
 #include "mjc/app/can_node.h"
 
 namespace mjc::app {
 
 using protocol::WireEnergy;
 
-void CanNode::SendEvent(const AppEvent& e) {
-  switch (e.kind) {
-    case AppEvent::Kind::kFault: {
+void CanNode::DoTake(const service::Report& r) {
+  using Kind = service::Report::Kind;
+  switch (r.kind) {
+    case Kind::kCommandDone:
+      return Send(r.command);
+    case Kind::kMotionStarted:
+      return Send(r.motion);
+    case Kind::kParamDone: {
+      const CommandOutcomeCode o = r.outcome.result;
+      return SendParam(r.param, o == CommandOutcomeCode::kAccepted
+                                    ? protocol::ParamStatus::kOk
+                                : o == CommandOutcomeCode::kRefusedInvalid
+                                    ? protocol::ParamStatus::kOutOfRange
+                                : o == CommandOutcomeCode::kRefusedBusy
+                                    ? protocol::ParamStatus::kRefusedBusy
+                                    : protocol::ParamStatus::kRefusedNotIdle);
+    }
+    case Kind::kCalibrationDone:
+      return ReplyCalibration(r.calibration, r.detail);
+    case Kind::kBootHold: {
+      if (r.boot != protocol::BootError::kNone) ++counters_.boot_holds_refused;
+      protocol::BootResult b;
+      b.request = protocol::BootRequest::kHold;
+      b.error = r.boot;
+      // Accepted ({hold, none}): the bootloader's BootStatus follows within milliseconds.
+      return Send(b);
+    }
+    case Kind::kFault: {
       protocol::FaultEvent f;
-      f.fault = e.fault;
-      f.tick = e.tick;
+      f.fault = r.fault;
+      f.tick = r.tick;
       f.state = protocol::BoardState::kFault;
       return Send(f);
     }
-    case AppEvent::Kind::kCommandDone:
-      return OnVerdict(e);
-    case AppEvent::Kind::kStateChanged:
-      // A motion that ended is nobody's any more.
-      if (e.state == BoardState::kIdle || e.state == BoardState::kFault) {
-        motion_session_ = 0;
-        motion_code_ = 0;
-      }
-      heartbeat_.Now(clock_.ticks());  // tell the host at once
+    case Kind::kStateChanged:
+      heartbeat_.Now(service_->clock().ticks());  // tell the host at once
       return;
-    case AppEvent::Kind::kWindow: {
-      const WindowSummary& w = e.window;
-      // The attachment's fit, solved here in the main loop from the tick's sums.
-      const InterfaceFit fit = app_->SolveWindowFit(w.start_tick);
-      protocol::WindowHeader h;
-      h.motion = w.motion;
-      h.repetition = w.repetition;
-      h.eta_valid = w.eta_valid;
-      h.eta_percent = w.eta_percent;
-      h.fit_status = fit.status;
-      Send(h);
-      Send(protocol::WindowEnergy{FixedCast<WireEnergy>(w.loading),
-                                  FixedCast<WireEnergy>(w.unloading)});
-      Send(protocol::WindowWork{FixedCast<WireEnergy>(w.positive_work),
-                                FixedCast<WireEnergy>(w.negative_work)});
-      Send(protocol::WindowPeaks{w.peak_power, w.peak_torque});
-      // Fits: trials and sweeps with longer windows are refused (kDetailWindowTooLong).
-      protocol::WindowTicks t;
-      t.start_tick = w.start_tick;
-      t.peak_offset = static_cast<std::uint16_t>(w.peak_tick - w.start_tick);
-      t.end_offset = static_cast<std::uint16_t>(w.end_tick - w.start_tick);
-      Send(t);
-      Send(protocol::WindowFit{fit.stiffness, fit.damping});
-      return Send(protocol::WindowFitResidual{fit.offset, fit.residual_rms});
-    }
+    case Kind::kWindow:
+      return SendWindow(r.window, r.fit);
+    case Kind::kWindowStart:
+      return Send(r.window_start);
   }
 }
 
-void CanNode::AnnounceWindow(const JointApp::Snapshot& last) {
-  const Segment segment = last.telemetry.segment;
-  if (segment != last_segment_ &&
-      (segment == Segment::kFlexionLoading || segment == Segment::kExtensionLoading)) {
-    protocol::WindowStart w;
-    w.motion =
-        segment == Segment::kFlexionLoading ? Motion::kFlexion : Motion::kExtension;
-    w.start_tick = last.telemetry.tick;
-    w.config16 = static_cast<std::uint16_t>(motion_config_ & 0xFFFFu);
-    Send(w);
-  }
-  last_segment_ = segment;
+void CanNode::SendWindow(const WindowSummary& w, const InterfaceFit& fit) {
+  protocol::WindowHeader h;
+  h.motion = w.motion;
+  h.repetition = w.repetition;
+  h.eta_valid = w.eta_valid;
+  h.eta_percent = w.eta_percent;
+  h.fit_status = fit.status;
+  Send(h);
+  Send(protocol::WindowEnergy{FixedCast<WireEnergy>(w.loading),
+                              FixedCast<WireEnergy>(w.unloading)});
+  Send(protocol::WindowWork{FixedCast<WireEnergy>(w.positive_work),
+                            FixedCast<WireEnergy>(w.negative_work)});
+  Send(protocol::WindowPeaks{w.peak_power, w.peak_torque});
+  // Fits: trials and sweeps with longer windows are refused (kDetailWindowTooLong).
+  protocol::WindowTicks t;
+  t.start_tick = w.start_tick;
+  t.peak_offset = static_cast<std::uint16_t>(w.peak_tick - w.start_tick);
+  t.end_offset = static_cast<std::uint16_t>(w.end_tick - w.start_tick);
+  Send(t);
+  Send(protocol::WindowFit{fit.stiffness, fit.damping});
+  Send(protocol::WindowFitResidual{fit.offset, fit.residual_rms});
 }
 
 void CanNode::SendTelemetry(const JointApp::Snapshot& last) {
   const Telemetry& t = last.telemetry;
-  const std::uint32_t now = clock_.ticks();
+  const std::uint32_t now = service_->clock().ticks();
   const std::uint32_t hz = tick_hz();
   if (angles_.Due(now, config_.rates.angles_hz, hz)) SendAngles(t);
   if (torque_.Due(now, config_.rates.torque_hz, hz)) {

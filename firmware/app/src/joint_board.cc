@@ -17,17 +17,17 @@ JointBoard::JointBoard(const JointBoardConfig& config, hal::CanPort* port,
                               : std::optional<CalibrationStore>(
                                     std::in_place, flash, config.calibration_page_a,
                                     config.calibration_page_b)),
-      node_(&app_, WithBootloader(config.can, boot != nullptr),
-            store_ ? &*store_ : nullptr),
+      service_(&app_, store_ ? &*store_ : nullptr),
+      node_(&service_, WithBootloader(config.can, boot != nullptr)),
       port_(port),
       boot_(boot) {}
 
 std::optional<CalibrationStore::Loaded> JointBoard::Boot() {
   if (!store_) return std::nullopt;
-  auto restored = RestoreCalibration(app_, *store_);
+  auto restored = service_.Boot();
   // A calibration page the flash could not read (a save cut by a power loss): the
   // other page's record (or none) was taken; the board says so in its BoardInfo.
-  const std::uint8_t bad = store_->unreadable_pages();
+  const std::uint8_t bad = service_.unreadable_pages();
   node_.AddFlashUnreadable(static_cast<std::uint8_t>(
       ((bad & 1u) ? protocol::flash_unreadable::kCalibrationA : 0u) |
       ((bad & 2u) ? protocol::flash_unreadable::kCalibrationB : 0u)));
@@ -43,6 +43,9 @@ void JointBoard::Poll() {
       node_.HandleFrame(frame);
     }
   }
+  // The service first (the tick's verdicts and events, as reports to the node), then the
+  // node's own frames (telemetry).
+  service_.Poll();
   node_.Poll();
   if (port_ == nullptr) {
     protocol::CanFrame dropped;
@@ -61,7 +64,7 @@ void JointBoard::Poll() {
   }
   // The hold's answer is with the port (or waits behind a full one: it is a courtesy, the
   // host watches for the bootloader's own frames).
-  if (boot_ != nullptr && node_.EnterBootloaderNow()) boot_->EnterBootloader();
+  if (boot_ != nullptr && service_.EnterBootloaderNow()) boot_->EnterBootloader();
 }
 
 }  // namespace mjc::app

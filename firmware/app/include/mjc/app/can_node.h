@@ -1,5 +1,8 @@
-// The board's CAN side: received frames become JointApp commands, app events and
-// telemetry become frames on a transmit queue the CAN driver drains.
+// The board's CAN side, a transport: received frames (and calibration records over
+// ISO-TP) are decoded into the joint service's requests (mjc/service/joint_service.h),
+// its reports and the tick's telemetry are encoded as frames (angle samples batched on
+// a CAN FD link) on a transmit queue the CAN driver drains. What the board decides
+// (verdicts, supervision, the calibration's store, the window fits) is the service's.
 //
 // Contexts: HandleFrame and Poll run in the main loop (never in the control tick);
 // the driver's transmit path pops frames from the queue (SPSC, so it may be an
@@ -11,6 +14,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 
 #include "mjc/app/board_clock.h"
 #include "mjc/app/calibration_store.h"
@@ -19,6 +23,7 @@
 #include "mjc/protocol/calibration_record.h"
 #include "mjc/protocol/codec.h"
 #include "mjc/protocol/isotp.h"
+#include "mjc/service/joint_service.h"
 
 namespace mjc::app {
 
@@ -86,17 +91,23 @@ struct CanNodeCounters {
   }
 };
 
-class CanNode {
+class CanNode final : public service::ReportSink {
  public:
-  // `store` (may be null: nothing persists) keeps every applied calibration.
+  // The board's node: the service (which must outlive the node) takes its requests and
+  // sends it its reports; the service's owner polls it before the node (JointBoard).
+  CanNode(service::JointService* service, const CanNodeConfig& config);
+  // A node on its own (a unit test's rig): it keeps a service of its own around `app`,
+  // with `store` (may be null: nothing persists), and polls it in Poll.
   CanNode(JointApp* app, const CanNodeConfig& config, CalibrationStore* store = nullptr);
+  CanNode(const CanNode&) = delete;
+  CanNode& operator=(const CanNode&) = delete;
 
   // A frame from the bus: this node's, or a broadcast StopAll (every node's: the next
   // tick latches Fault::kEmergencyStop and disables the bridge).
   void HandleFrame(const protocol::CanFrame& frame);
 
-  // Once per control tick (after it), in the main loop: command verdicts and other
-  // events, telemetry at their rates, the heartbeat, the stream timeout.
+  // Once per control tick (after it and the service's poll), in the main loop: an
+  // upload that timed out, telemetry at its rates, the heartbeat, BoardInfo.
   void Poll();
 
   // The driver's side of the transmit queue.
@@ -113,7 +124,7 @@ class CanNode {
   // saved, the answer is queued): the board should now enter its bootloader
   // (hal::BootEntry), once the queued frames have gone to the port. From the hold on,
   // starts and calibrations are refused as busy.
-  bool EnterBootloaderNow() const { return leaving_ && !config_change_pending_; }
+  bool EnterBootloaderNow() const { return service_->EnterBootloaderNow(); }
 
   CanNodeCounters counters() const;
   const CanNodeConfig& config() const { return config_; }
@@ -125,103 +136,48 @@ class CanNode {
   }
 
  private:
-  // What a command handed to the app came from, for answering its verdict.
-  enum class Origin : std::uint8_t { kCommand = 1, kParam = 2, kCalibration = 3 };
-
-  // Request tags: the origin in bits 24-31; a command's code and sequence, or a
-  // parameter's id, below; a command's session in bits 32-47 (its answer names it).
-  static RequestTag Tag(Origin origin, std::uint32_t low) {
-    return (RequestTag{static_cast<std::uint8_t>(origin)} << 24) | low;
-  }
-  static Origin OriginOf(RequestTag tag) {
-    return static_cast<Origin>((tag >> 24) & 0xFFu);
-  }
-  static protocol::SessionId SessionOf(RequestTag tag) {
-    return static_cast<protocol::SessionId>((tag >> 32) & 0xFFFFu);
-  }
-
   template <class M>
   void Send(const M& message) {
     Push(protocol::Encode(message, config_.node));
   }
   void Push(const protocol::CanFrame& frame);
-  std::uint32_t tick_hz() const { return app_->config().tick_hz; }
+  std::uint32_t tick_hz() const { return service_->tick_hz(); }
+  // The node's settings that are the service's: told again after every write of them.
+  void TellSupervision();
 
-  // Commands and host supervision (can_node.cc).
-  void HandleCommand(const protocol::Command& c);
-  // Answers a request the app refused at once, or (OnVerdict) the tick's verdict on
-  // one it took.
-  void Answer(RequestTag tag, const CommandOutcome& outcome);
-  void OnVerdict(const AppEvent& e);
-  void Supervise(const JointApp::Snapshot& last);
-  // A host asks the board into its bootloader: accepted only at rest.
-  void HandleBootHold(const protocol::BootHold& hold);
+  // A service's report, as frames (can_node_reports.cc).
+  void DoTake(const service::Report& report) override;
   // Parameters (can_node_params.cc).
   void HandleParam(protocol::ParamId id, bool write, std::int32_t value);
   void SendParam(protocol::ParamId id, protocol::ParamStatus status);
   // A refused write's answer: the status and the bound it names.
   void RefuseParam(protocol::ParamId id, protocol::ParamStatus status,
                    std::int32_t bound);
-  // A motion runs or is about to start: the protections' parameters stay as they are.
-  bool MotionRuns() const;
   // Calibration records over ISO-TP (can_node_upload.cc).
   void HandleIsoTp(const protocol::CanFrame& frame);
   void PollUpload();
-  void AnswerCalibration(const CommandOutcome& outcome);
   void ReplyCalibration(protocol::CalibrationResult result, std::uint8_t detail);
-  // Reports: app events and telemetry as frames (can_node_reports.cc).
-  void SendEvent(const AppEvent& e);
-  // A WindowStart when the last tick's setpoint entered a loading segment.
-  void AnnounceWindow(const JointApp::Snapshot& last);
+  // Reports and telemetry as frames (can_node_reports.cc).
+  void SendWindow(const WindowSummary& w, const InterfaceFit& fit);
   void SendTelemetry(const JointApp::Snapshot& last);
   // One angle sample: a frame of its own, or (FD) into the batch, sent once full.
   void SendAngles(const Telemetry& t);
 
-  JointApp* app_;
+  // A node on its own keeps its service here (the board's is the board's).
+  std::optional<service::JointService> own_service_;
+  service::JointService* service_;
   CanNodeConfig config_;
   CanNodeCounters counters_;
   // 64 frames: a pass of the main loop queues at most a window (7 frames), the
   // telemetry due (7), a reply to each frame it took (JointBoard::kMostFramesPerPoll)
   // and a started motion's MotionConfig.
   SpscQueue<protocol::CanFrame, 64> tx_;
-  BoardClock clock_;
-  protocol::TrialConfig trial_;
-  protocol::SweepConfig sweep_;
-  bool have_trial_ = false;
-  bool have_sweep_ = false;
-  // A parameter write or calibration the tick has not yet answered: the next one waits
-  // (kRefusedBusy), so none is built on a config about to change.
-  bool config_change_pending_ = false;
-  // The calibration awaiting the tick's verdict; saved to the store once applied.
-  protocol::CalibrationRecord pending_record_;
   protocol::IsoTpReceiver isotp_;
-  CalibrationStore* store_;
   Cadence angles_, torque_, power_, energy_, control_, heartbeat_, info_;
   // FD: the batch being filled and how many samples it holds; first_sample counts every
   // angle sample the board has taken since its start.
   protocol::TelemetryAngleBatch batch_;
   std::size_t batch_fill_ = 0;
-  // The setpoint's segment at the last poll: a change into a loading segment is a
-  // window's start (AnnounceWindow).
-  Segment last_segment_ = Segment::kIdle;
-  // Streaming: the tick of the last setpoint (or of the stream's start).
-  std::uint32_t last_setpoint_tick_ = 0;
-  // Host supervision. A start command awaiting the tick's verdict, and its session;
-  // the session the running motion belongs to (0: unsupervised, or none running) and
-  // the tick of its last heartbeat (or of the motion's start).
-  bool start_pending_ = false;
-  protocol::SessionId start_session_ = 0;
-  protocol::SessionId motion_session_ = 0;
-  // What the pending start and the motion last started run: their start code and the
-  // digest of their configuration (MotionConfig, WindowStart). motion_code_ is 0 while
-  // no motion runs (a refused start names the one that holds the board).
-  protocol::CommandCode start_code_ = protocol::CommandCode::kStop;
-  protocol::ConfigDigest start_config_ = 0;
-  std::uint8_t motion_code_ = 0;
-  protocol::ConfigDigest motion_config_ = 0;
-  std::uint32_t last_host_tick_ = 0;
-  // A BootHold was accepted: the board is on its way into the bootloader.
-  bool leaving_ = false;
 };
 
 }  // namespace mjc::app

@@ -38,7 +38,7 @@ struct CommandOutcome {
 };
 
 // The submitter's name for a command, returned unchanged with the tick's verdict (64
-// bits: the CAN node names a command by its origin, code, sequence and session).
+// bits: the joint service names a command by its origin, code, sequence and session).
 using RequestTag = std::uint64_t;
 
 struct AppEvent {
@@ -82,7 +82,7 @@ class JointApp {
   void SetStreamTarget(Angle target) {
     stream_target_.store(target.raw(), std::memory_order_relaxed);
   }
-  // The CAN side saw the setpoint stream or the host go quiet, or the bus go off
+  // The main loop saw the setpoint stream or the host go quiet, or the bus go off
   // (IsExternalFault codes; others are ignored): the next tick latches the fault and
   // stops the motor. Lock-free and never lost: the tick loads the code and, when one
   // is pending, takes it with an atomic exchange. Two raised before one tick latch the

@@ -1,6 +1,8 @@
 // The joint board: the firmware's composition root. It owns the application (JointApp
-// and its control tick), the CAN node and the calibration store, wires them to the
-// board's CAN port and flash, boots them and serves the main loop. The STM32G474 image,
+// and its control tick), the joint service (its main loop: mjc/service/joint_service.h),
+// the CAN node (the transport) and the calibration store, wires them to the board's CAN
+// port and flash, boots them and serves the main loop: port → node → service → node →
+// port. The STM32G474 image,
 // the simulated board (`mjc sim`, the test rigs, the paper's scenarios) and the kernel
 // self-test all build the board from this class: the board loop is written once.
 //
@@ -19,6 +21,7 @@
 #include "mjc/app/calibration_store.h"
 #include "mjc/app/can_node.h"
 #include "mjc/app/joint_app.h"
+#include "mjc/service/joint_service.h"
 
 namespace mjc::app {
 
@@ -55,8 +58,10 @@ class JointBoard {
     app_.ISR_Tick(io);
   }
 
-  // One pass of the main loop: the port's bus-off reports and received frames in, the
-  // node's poll (verdicts, events, telemetry, timeouts), its frames out as far as the
+  // One pass of the main loop: the port's bus-off reports and received frames in (the
+  // node decodes them into the service's requests), the service's poll (verdicts,
+  // events, window fits, timeouts, reported to the node), the node's poll (telemetry),
+  // its frames out as far as the
   // port takes them (the rest wait, in order, for the next pass). Last, when a host's
   // BootHold was accepted, the board enters its bootloader (hal::BootEntry): on the chip
   // this pass does not return.
@@ -72,10 +77,13 @@ class JointBoard {
   // The CAN node, for rigs that hand it frames past the port (a flood, a fuzzer).
   CanNode& node() { return node_; }
   const CanNode& node() const { return node_; }
+  service::JointService& service() { return service_; }
+  const service::JointService& service() const { return service_; }
 
  private:
   JointApp app_;
   std::optional<CalibrationStore> store_;
+  service::JointService service_;
   CanNode node_;
   hal::CanPort* port_;
   hal::BootEntry* boot_;
