@@ -126,7 +126,8 @@ void ControlTickTrial() {
 // and the heartbeat due at once). With the tick's count these bound the work per
 // 100 µs under a full-rate flood (./bench: flood_instructions_per_tick).
 app::JointApp g_app{ControlConfig{}};
-app::CanNode g_node{&g_app, app::CanNodeConfig{}};
+service::JointService g_service{&g_app, nullptr};
+app::CanNode g_node{&g_service, app::CanNodeConfig{}};
 protocol::CanFrame g_frames[4];
 
 void DrainTx() {
@@ -138,7 +139,10 @@ void FrameForeign() { g_node.HandleFrame(g_frames[0]); }
 void FrameMalformed() { g_node.HandleFrame(g_frames[1]); }
 void FrameSetpoint() { g_node.HandleFrame(g_frames[2]); }
 void FrameParamRead() { g_node.HandleFrame(g_frames[3]); }
-void PollAllDue() { g_node.Poll(); }
+void PollAllDue() {
+  g_service.Poll();
+  g_node.Poll();
+}
 
 // Names are stable: ./bench prints each as "<name>_cm4: <count> instructions".
 constexpr bench::Entry kEntries[] = {

@@ -24,16 +24,6 @@ CanNode::CanNode(service::JointService* service, const CanNodeConfig& config)
   TellSupervision();
 }
 
-CanNode::CanNode(JointApp* app, const CanNodeConfig& config, CalibrationStore* store)
-    : own_service_(std::in_place, app, store),
-      service_(&*own_service_),
-      config_(config),
-      isotp_(protocol::MakeId(static_cast<std::uint8_t>(Function::kIsoTpFromBoard),
-                              config.node)) {
-  service_->Attach(this);
-  TellSupervision();
-}
-
 void CanNode::TellSupervision() {
   service_->SetSupervision(
       {config_.stream_timeout_ms, config_.host_timeout_ms, config_.stream_rate});
@@ -152,7 +142,6 @@ void CanNode::OnBusOff() {
 }
 
 void CanNode::Poll() {
-  if (own_service_) own_service_->Poll();
   PollUpload();
   SendTelemetry(service_->last());
 }

@@ -34,11 +34,12 @@ mjc::Calibration TestCalibration() {
 
 struct Board {
   explicit Board(const CanNodeConfig& config = {})
-      : app(ControlConfig{}), node(&app, config) {}
+      : app(ControlConfig{}), service(&app, nullptr), node(&service, config) {}
   // Ticks the app and polls the node; counts what it sent by function code.
   void Run(int ticks) {
     for (int i = 0; i < ticks; ++i) {
       app.ISR_Tick(io);
+      service.Poll();
       node.Poll();
       Drain();
     }
@@ -62,6 +63,7 @@ struct Board {
     }
   }
   JointApp app;
+  service::JointService service;
   CanNode node;
   QuietIo io;
   std::uint32_t sent[128] = {};
@@ -484,13 +486,15 @@ MJC_VECTOR_TEST(CanNode, TellsWhoItIsAtStartAndTenTimesASecond) {
   config.identity.dirty = true;
   config.identity.reset_cause = ResetCause::kWatchdog;
   config.identity.instance = 0xBEEF;
-  static CanNode node(&app, config);
+  static service::JointService service(&app, nullptr);
+  static CanNode node(&service, config);
   QuietIo io;
   int infos = 0;
   BoardInfo last;
   const auto run = [&](int ticks) {
     for (int i = 0; i < ticks; ++i) {
       app.ISR_Tick(io);
+      service.Poll();
       node.Poll();
       CanFrame f;
       while (node.PopTx(&f)) {
@@ -698,7 +702,8 @@ struct AngleLog {
 };
 
 struct TurningBoard {
-  explicit TurningBoard(bool fd) : app(ControlConfig{}), node(&app, Config(fd)) {}
+  explicit TurningBoard(bool fd)
+      : app(ControlConfig{}), service(&app, nullptr), node(&service, Config(fd)) {}
   static CanNodeConfig Config(bool fd) {
     CanNodeConfig c;
     c.fd = fd;
@@ -707,11 +712,13 @@ struct TurningBoard {
   void Run(int ticks, bool drain = true) {
     for (int i = 0; i < ticks; ++i) {
       app.ISR_Tick(io);
+      service.Poll();
       node.Poll();
       for (CanFrame f; drain && node.PopTx(&f);) log.Take(f);
     }
   }
   JointApp app;
+  service::JointService service;
   CanNode node;
   TurningIo io;
   AngleLog log;
@@ -802,6 +809,7 @@ MJC_VECTOR_TEST(CanNode, AStartRunsOnlyTheConfigurationItNames) {
   b.node.HandleFrame(Encode(Command{CommandCode::kStartTrial, 3, 0x5151, digest}, 1));
   const int starts_before = b.starts_n;
   b.app.ISR_Tick(b.io);
+  b.service.Poll();
   b.node.Poll();
   CanFrame f;
   bool answered = false, named = false;

@@ -27,10 +27,12 @@ struct QuietIo {
 };
 
 struct Board {
-  Board() : app(ControlConfig{}), node(&app, CanNodeConfig{}) {}
+  Board()
+      : app(ControlConfig{}), service(&app, nullptr), node(&service, CanNodeConfig{}) {}
   void Run(int ticks) {
     for (int i = 0; i < ticks; ++i) {
       app.ISR_Tick(io);
+      service.Poll();
       node.Poll();
       Drain();
     }
@@ -59,6 +61,7 @@ struct Board {
     return last.value;
   }
   JointApp app;
+  service::JointService service;
   CanNode node;
   QuietIo io;
   ParamValue last;

@@ -14,7 +14,6 @@
 
 #include <array>
 #include <cstdint>
-#include <optional>
 
 #include "mjc/app/board_clock.h"
 #include "mjc/app/calibration_store.h"
@@ -96,9 +95,6 @@ class CanNode final : public service::ReportSink {
   // The board's node: the service (which must outlive the node) takes its requests and
   // sends it its reports; the service's owner polls it before the node (JointBoard).
   CanNode(service::JointService* service, const CanNodeConfig& config);
-  // A node on its own (a unit test's rig): it keeps a service of its own around `app`,
-  // with `store` (may be null: nothing persists), and polls it in Poll.
-  CanNode(JointApp* app, const CanNodeConfig& config, CalibrationStore* store = nullptr);
   CanNode(const CanNode&) = delete;
   CanNode& operator=(const CanNode&) = delete;
 
@@ -163,8 +159,6 @@ class CanNode final : public service::ReportSink {
   // One angle sample: a frame of its own, or (FD) into the batch, sent once full.
   void SendAngles(const Telemetry& t);
 
-  // A node on its own keeps its service here (the board's is the board's).
-  std::optional<service::JointService> own_service_;
   service::JointService* service_;
   CanNodeConfig config_;
   CanNodeCounters counters_;
