@@ -1,4 +1,4 @@
-// Shared by the sim tests and ./bench (tests/bench/sim_fidelity.cc): the paper's
+// Shared by the sim tests and ./bench (tests/bench/sim_experiment.cc): the paper's
 // experiment against its model (the board's identified attachment as a Kelvin–Voigt
 // interface, the same sweep simulated on it), a joint that cannot move under the
 // calibration sweep, and the α = 1.25 example joint of robots/.
