@@ -33,6 +33,7 @@ Exit ExitOf(host::UpdateEnd end) {
       return Exit::kRefused;
     case host::UpdateEnd::kSilent:
     case host::UpdateEnd::kNotEntering:
+    case host::UpdateEnd::kGoneCommitted:
       return Exit::kNoAnswer;
     case host::UpdateEnd::kFailed:
       return Exit::kNotUpdated;

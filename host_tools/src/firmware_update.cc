@@ -329,6 +329,7 @@ FirmwareUpdate::Step FirmwareUpdate::Fail(UpdateResult* r, Wait wait,
     case Wait::kInterrupted:
       return FailWith(r, "interrupted " + doing);
     case Wait::kSilent: {
+      if (committed_) return AwaitReturn(r, doing);
       const std::string progress =
           erased_ ? " (" + Percent(next_offset_, image_.header.length) + " programmed)"
                   : "";
@@ -347,6 +348,50 @@ FirmwareUpdate::Step FirmwareUpdate::Fail(UpdateResult* r, Wait wait,
       break;
   }
   return FailWith(r, Who() + " did not answer " + doing);
+}
+
+FirmwareUpdate::Step FirmwareUpdate::AwaitReturn(UpdateResult* r,
+                                                 const std::string& doing) {
+  // The image is whole and committed, so a board that lost power or was reset after
+  // the commit starts it when it comes back (its bootloader checks it and hands over):
+  // listen one more silence for its return, and report what it runs.
+  const std::string gone = Who() + " went silent " + doing + " (a power cut or a reset?)";
+  const auto started = [&] { return info_ && info_->image == ImageKind::kApplication; };
+  const auto stayed = [&] {
+    return bootloader_starts_ != starts_at_commit_ && status_ &&
+           (status_->state == BootState::kReady ||
+            status_->state == BootState::kReceiving);
+  };
+  const Wait w = Await([&] { return started() || stayed(); }, 0);
+  if (w == Wait::kDone && started()) {
+    if (info_->build == image_.header.commit && info_->dirty == image_.header.dirty) {
+      r->end = UpdateEnd::kUpdated;
+      r->in_bootloader = false;
+      r->message = gone + " and came back running " + image_.BuildText() +
+                   ": the committed image held";
+      return Step::kEnd;
+    }
+    return FailWith(r, gone + " and came back running build " +
+                           BuildName(info_->build, info_->dirty) + ", not the image's " +
+                           image_.BuildText());
+  }
+  if (w == Wait::kDone) {
+    r->end = UpdateEnd::kFailed;
+    r->in_bootloader = true;
+    r->message = gone + " and came back in its bootloader, which stays (" +
+                 DescribeBootStatus(*status_) + "): run mjc flash again";
+    return Step::kEnd;
+  }
+  if (w == Wait::kSilent) {
+    r->end = UpdateEnd::kGoneCommitted;
+    r->in_bootloader = false;
+    r->message = gone +
+                 " after the new image was committed, and has not come back: "
+                 "the image is whole, and the board starts it when it is powered again "
+                 "(mjc list shows what it runs)";
+    return Step::kEnd;
+  }
+  return Fail(r, w, "while it came back");
 }
 
 FirmwareUpdate::Step FirmwareUpdate::Catch(UpdateResult* r) {
@@ -554,6 +599,13 @@ std::optional<BootResult> FirmwareUpdate::Command(BootRequest request,
       *end = Fail(r, w, "at " + doing);
       return std::nullopt;
     }
+    // Unanswered because the board restarted after the commit (a power cut or a reset
+    // within the silence): what it runs now is the answer.
+    if (committed_ && (bootloader_starts_ != starts_at_commit_ ||
+                       (info_ && info_->image == ImageKind::kApplication))) {
+      *end = AwaitReturn(r, "at " + doing);
+      return std::nullopt;
+    }
     if (++failures > kMostFailures) {
       *end = FailWith(r, Who() + " did not answer " + doing);
       return std::nullopt;
@@ -575,7 +627,11 @@ FirmwareUpdate::Step FirmwareUpdate::Commit(UpdateResult* r) {
         const Wait c =
             Await([this] { return status_ && status_->state == BootState::kCommitted; },
                   kAnswerMs);
-        if (c == Wait::kDone) return Step::kNext;
+        if (c == Wait::kDone) {
+          committed_ = true;
+          starts_at_commit_ = bootloader_starts_;
+          return Step::kNext;
+        }
         if (c != Wait::kBoardTime) return Fail(r, c, "after the commit");
         return FailWith(r, Who() +
                                " answered the commit but does not report the image "

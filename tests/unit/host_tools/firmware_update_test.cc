@@ -269,6 +269,49 @@ TEST(FirmwareUpdate, APowerCutMidUploadLeavesTheBootloaderWaitingAndASecondUpdat
   EXPECT_TRUE(Outside(rig.flash()) == outside);
 }
 
+// A power cut once the board has committed the new image: the update ends on what the
+// board runs when it comes back, never on a guess. Back after 2 s: the new image (its
+// bootloader checked it and handed over), reported as updated; never back: said so,
+// with the image whole.
+TEST(FirmwareUpdate, APowerCutAfterTheCommitReportsWhatTheBoardRunsWhenItComesBack) {
+  for (const bool back : {true, false}) {
+    SCOPED_TRACE(back ? "power back after 2 s" : "power never back");
+    FlashRig rig;
+    Commission(rig);
+    rig.PowerOn();
+    rig.RunMs(500);
+    const auto image = Checked(PackedImage(kNewBuild, 32 * 1024, 9));
+    int off_ms = -1;  // since the cut
+    rig.watch = [&](FlashRig& r) {
+      const boot::Bootloader* b = r.board() ? r.board()->bootloader() : nullptr;
+      if (off_ms < 0 && b != nullptr && b->state() == protocol::BootState::kCommitted) {
+        r.PowerOff();
+        off_ms = 0;
+      } else if (off_ms >= 0 && r.board() == nullptr && back && ++off_ms == 2000) {
+        r.PowerOn(3);
+      }
+    };
+    const host::UpdateResult r = rig.Update(kNode, image);
+    rig.watch = nullptr;
+    ASSERT_GE(off_ms, 0) << "the board never reported the image committed";
+    if (back) {
+      EXPECT_EQ(r.end, UpdateEnd::kUpdated) << r.message;
+      EXPECT_NE(r.message.find("node 3 went silent"), std::string::npos) << r.message;
+      EXPECT_NE(r.message.find("came back running"), std::string::npos) << r.message;
+      EXPECT_EQ(r.message.find("not whole"), std::string::npos) << r.message;
+      ExpectRunning(rig, kNewBuild);
+    } else {
+      EXPECT_EQ(r.end, UpdateEnd::kGoneCommitted) << r.message;
+      EXPECT_FALSE(r.in_bootloader);
+      EXPECT_NE(r.message.find("the image is whole"), std::string::npos) << r.message;
+      // Powered again later, it runs the new image.
+      rig.PowerOn(4);
+      rig.RunMs(1500);
+      ExpectRunning(rig, kNewBuild);
+    }
+  }
+}
+
 TEST(FirmwareUpdate, LostFramesAndAnswersAreSentAgainFromWhereTheBoardIs) {
   FlashRig rig;
   Commission(rig);

@@ -96,6 +96,9 @@ enum class UpdateEnd : std::uint8_t {
                        // update)
   kLinkFailed = 6,     // this side could not send or receive
   kInterrupted = 7,    // a signal, before anything was done
+  kGoneCommitted = 8,  // went silent after the image was committed and did not come
+                       // back within a silence: the image is whole, and the board
+                       // starts it when it is powered again (not seen running it)
 };
 
 struct UpdateProgress {
@@ -207,6 +210,9 @@ class FirmwareUpdate {
   // Ends the update after a wait that did not end well, or with `what`; the message
   // says where the board was left.
   Step Fail(UpdateResult* r, Wait wait, const std::string& doing);
+  // Silent after the commit: waits a silence more for the board's return and reports
+  // what it runs then (the new image, its bootloader, or nothing heard).
+  Step AwaitReturn(UpdateResult* r, const std::string& doing);
   Step FailWith(UpdateResult* r, const std::string& what);
   std::string Who() const;
   std::string Where() const;
@@ -237,7 +243,9 @@ class FirmwareUpdate {
   std::optional<std::uint32_t> last_app_ms_;
   bool link_failed_ = false;
   std::string link_why_;
-  bool erased_ = false;  // a Begin was accepted: the old image is gone
+  bool erased_ = false;                 // a Begin was accepted: the old image is gone
+  bool committed_ = false;              // the board reported the new image committed
+  std::uint64_t starts_at_commit_ = 0;  // bootloader_starts_ then
   std::uint32_t next_offset_ = 0;
   std::string last_restart_why_;
 };
