@@ -45,7 +45,8 @@ using protocol::CommandOutcomeCode;
 using protocol::ParamId;
 
 // The files a calibration run writes into its folder (replaced under --force).
-const std::vector<std::string> kOutputs = {"calibration.json", "sweep.csv", "run.json"};
+const std::vector<std::string> kOutputs = {"calibration.json", "sweep.csv", "run.json",
+                                           "run.mat"};
 
 // sweep.csv as the samples arrive: its header at the sweep's start, then each pass's
 // samples appended at once (host::AppendFile), so a host that dies mid-sweep leaves

@@ -55,8 +55,8 @@ Exit ExitOf(host::TrialEnd end) {
 }
 
 // The files a trial run writes into its folder (replaced under --force).
-const std::vector<std::string> kTrialOutputs = {"windows.csv", "run.json",   "eta.png",
-                                                "eta.gp",      "eta.gp.log", "report.md"};
+const std::vector<std::string> kTrialOutputs = {
+    "windows.csv", "run.json", "run.mat", "eta.png", "eta.gp", "eta.gp.log", "report.md"};
 
 }  // namespace
 

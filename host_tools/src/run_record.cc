@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "mjc/host/describe.h"
+#include "mjc/host/mat_record.h"
 #include "mjc/host/param_io.h"
 #include "mjc/host/report.h"
 #include "mjc/host/robot_description.h"
@@ -325,6 +326,11 @@ std::optional<RunRecord> RunRecordFromJson(const nlohmann::json& j, std::string*
 
 void WriteRunRecord(const RunRecord& record, const std::filesystem::path& dir) {
   ReplaceFile(dir / "run.json", RunRecordToJson(record).dump(2) + "\n");
+  // The run ended: its records, all in, also as one MATLAB file.
+  if (record.end.outcome != "running") {
+    std::string why;
+    if (!WriteRunMat(dir, &why)) throw std::runtime_error(why);
+  }
 }
 
 std::optional<RunRecord> ReadRunRecord(const std::filesystem::path& dir,
