@@ -75,7 +75,7 @@ check "  report.md names the board, the subject and the run" \
 cp "${dir:-.}/windows.csv" windows.before
 check "an --out that holds a run is refused, exit 1, before the bus" \
   refuses 1 used.err "$mjc" trial --iface vcan0 --node 2 --out "${dir:-.}"
-check "  saying why and what to do" grep -q "is not empty (report.md, run.json, windows.csv): a run never overwrites another; .*--force" used.err
+check "  saying why and what to do" grep -q "is not empty (report.md, run.json, run.mat, …): a run never overwrites another; .*--force" used.err
 check "  and the earlier run is untouched" cmp windows.before "${dir:-.}/windows.csv"
 
 # Parameters: node 1's dumped, two of them set (one between the steps of its format),
