@@ -718,24 +718,30 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
                                "'s limits: " + limits.why);
     }
   }
-  // What the board holds before the sweep and its telemetry rate, for the refit.
-  std::string why;
-  const auto held = host::ReadCalibration(board.client(), &why);
-  const auto rate_hz =
-      board.client().ReadParam(protocol::ParamId::kTelemetryAnglesHz, 500, &why);
-  if (!held || !rate_hz) throw std::runtime_error("the board did not answer: " + why);
+  // The calibration the board holds before the sweep, for the refit below: read on
+  // the board's side, so that the sweep starts on the tick it started on before the
+  // refit was added (the host's ReadCalibration would hold the bus for a few ticks).
+  const ControlConfig& before = board.app().control().config();
+  protocol::CalibrationRecord held;
+  held.backlash = before.backlash;
+  held.sea_stiffness = before.sea_stiffness;
+  held.joint_zero_count = before.joint_encoder.zero_offset;
   report.Progress("calibration sweep on the robot alone", 0.0);
   const sim::CalibrationOutcome cal =
       sim::RunCalibration(board, sim::PaperCalibrationSweep(), {joint.robot, false});
   report.Calibration(cal);
   // The sweep refitted with α free, whether or not its fit was refused. Without a
   // description the board assumed the default joint: checked against it.
+  std::string why;
+  const auto rate_hz =
+      board.client().ReadParam(protocol::ParamId::kTelemetryAnglesHz, 500, &why);
+  if (!rate_hz) throw std::runtime_error("the board did not answer: " + why);
   if (!cal.motor_rad.empty()) {
     const host::RobotDescription assumed;
     const host::RobotDescription& described = joint.robot ? *joint.robot : assumed;
     const host::SweepCalibration free =
-        host::FitSweep(cal.motor_rad, cal.joint_rad, static_cast<double>(*rate_hz),
-                       held->record, &described, true);
+        host::FitSweep(cal.motor_rad, cal.joint_rad, static_cast<double>(*rate_hz), held,
+                       &described, true);
     report.Check({.described_alpha = described.Alpha(),
                   .fixed_rms_rad = cal.fit.rms_error_rad,
                   .free_fitted = free.record.has_value(),
