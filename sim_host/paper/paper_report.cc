@@ -148,9 +148,8 @@ nlohmann::json WorkJson(const WorkPoint& p) {
           {"net_J", StatsJson(p.net)}};
 }
 
-// The motor pulley's largest excursions: the calibration sweep's (PaperCalibrationSweep)
-// and the amplitude sweep's largest trial.
-constexpr double kCalibrationAmplitudeDeg = 30.0;
+// The amplitude sweep's motor-pulley amplitudes (the largest, with the calibration
+// sweep's, bounds the joint's travel: TravelRefusal).
 const std::vector<double> kAmplitudesDeg = {6, 8, 11, 15, 20, 25};
 
 // The bound the default joint's windows are held to against the plant's truth
@@ -167,7 +166,9 @@ constexpr double kAlphaMismatch = 0.02;
 std::string TravelRefusal(const host::RobotDescription& robot) {
   const host::JointTravel travel{host::DegToRad(robot.extension_limit_deg),
                                  host::DegToRad(robot.flexion_limit_deg), robot.Alpha()};
-  for (const double a : {kCalibrationAmplitudeDeg, kAmplitudesDeg.back()}) {
+  const double sweep_deg =
+      host::RadToDeg(sim::PaperCalibrationSweep().end_amplitude.ToDouble());
+  for (const double a : {sweep_deg, kAmplitudesDeg.back()}) {
     const std::string why = host::TravelViolation(a, travel);
     if (!why.empty()) return robot.name + ": the paper's motion of " + why;
   }
@@ -719,8 +720,8 @@ int Run(const std::string& scenario, const plant::PlantParams& robot,
     }
   }
   // The calibration the board holds before the sweep, for the refit below: read on
-  // the board's side, so that the sweep starts on the tick it started on before the
-  // refit was added (the host's ReadCalibration would hold the bus for a few ticks).
+  // the board's side, so that the sweep starts on the same tick with or without the
+  // refit (the host's ReadCalibration would hold the bus for a few ticks).
   const ControlConfig& before = board.app().control().config();
   protocol::CalibrationRecord held;
   held.backlash = before.backlash;
