@@ -5,11 +5,15 @@
 // Prints the tables, writes CSV and JSON of every number and PNG figures (gnuplot).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "mjc/host/report.h"
+#include "mjc/host/robot_description.h"
+#include "mjc/host/run_record.h"
 #include "mjc/plant/params.h"
+#include "mjc/sim/robot_plant.h"
 #include "mjc/sim/scenarios.h"
 #include "paper_report.h"
 
@@ -20,6 +24,7 @@ using namespace mjc;
 struct Options {
   std::string scenario = "all";
   std::string robot = "default";
+  std::string robot_description;  // a robots/*.json file; empty: the default joint
   std::vector<std::string> subjects = {"subject1", "subject2", "subject3"};
   std::string out = "out/paper";
   bool noise = true;
@@ -53,10 +58,16 @@ int main(int argc, char** argv) {
   cli.add_option("--scenario", opt.scenario, "Which experiment to run")
       ->check(CLI::IsMember({"all", "calibration", "repeatability", "amplitude"}))
       ->capture_default_str();
-  cli.add_option("--robot", opt.robot,
-                 "Plant parameter set for the robot alone (calibration): a name in "
-                 "sim_host/params or a .json path")
-      ->capture_default_str();
+  auto* robot_option =
+      cli.add_option("--robot", opt.robot,
+                     "Plant parameter set for the robot alone (calibration): a name in "
+                     "sim_host/params or a .json path; with --robot-description and "
+                     "without --robot, the default set with the described joint")
+          ->capture_default_str();
+  cli.add_option("--robot-description", opt.robot_description,
+                 "The joint's robot description (robots/*.json), as mjc calibrate "
+                 "--robot takes it: the board's joint limits, the fit's alpha, the "
+                 "record's stiffness, cable friction and joint zero come from it");
   cli.add_option(
          "--subjects", opt.subjects,
          "Plant parameter sets of the subjects (names or .json paths); the first is "
@@ -97,9 +108,46 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  // The joint's description before anything runs or is written: a bad one is refused
+  // in one line, as `mjc calibrate --robot` refuses it.
+  paper::Joint joint;
+  std::optional<host::RobotDescription> described;
+  plant::PlantParams robot;
+  try {
+    robot = Load(opt.robot);
+    if (!opt.robot_description.empty()) {
+      std::string why;
+      described = host::LoadRobotDescription(opt.robot_description, &why);
+      if (!described) {
+        std::fprintf(stderr, "mjc-paper: robot description refused: %s\n", why.c_str());
+        return 1;
+      }
+      // Without --robot the plant is the described joint on the default set, as `mjc
+      // sim --robot-description` builds it; with it, the set given is the truth and the
+      // description what the board is told.
+      if (robot_option->count() == 0) {
+        robot = sim::PlantForRobot(*described, robot, app::DefaultJointConfig(),
+                                   opt.robot_description);
+      }
+      // The paper's calibration sweep and its largest trial turn the motor pulley
+      // ±30° and ±25°: the joint must have the travel for α times that.
+      const std::string beyond = paper::TravelRefusal(*described);
+      if (!beyond.empty()) {
+        std::fprintf(stderr, "mjc-paper: %s\n", beyond.c_str());
+        return 2;
+      }
+      joint.robot = &*described;
+      joint.path = opt.robot_description;
+      joint.record = host::RobotRecord(
+          opt.robot_description, host::ReadFileText(opt.robot_description).value_or(""));
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mjc-paper: %s\n", e.what());
+    return 1;
+  }
+
   paper::Report report(opt.out, opt.quiet, opt.frequency_hz);
   try {
-    plant::PlantParams robot = Load(opt.robot);
     std::vector<plant::PlantParams> subjects;
     for (const auto& s : opt.subjects) subjects.push_back(Load(s));
     robot.sensors.noise_seed = opt.seed;
@@ -114,7 +162,7 @@ int main(int argc, char** argv) {
       config.velocity_window = static_cast<std::uint16_t>(opt.velocity_window);
     }
     return paper::Run(opt.scenario, robot, subjects, config, opt.seed, opt.threads,
-                      opt.frequency_hz, report);
+                      opt.frequency_hz, report, joint);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mjc-paper: %s\n", e.what());
     return 1;

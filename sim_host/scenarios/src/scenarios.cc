@@ -13,6 +13,7 @@
 #include "mjc/host/board_client.h"
 #include "mjc/host/calibration_io.h"
 #include "mjc/host/describe.h"
+#include "mjc/host/joint_limits.h"
 #include "mjc/host/trial_runner.h"
 
 namespace mjc::sim {
@@ -478,7 +479,8 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
                                     const ControlConfig& config,
                                     const Calibration& record,
                                     const std::vector<TrialSpec>& specs, int threads,
-                                    const ProgressFn& progress) {
+                                    const ProgressFn& progress,
+                                    const host::RobotDescription* joint) {
   std::vector<TrialOutcome> out(specs.size());
   std::vector<std::exception_ptr> errors(specs.size());
   std::atomic<std::size_t> next{0};
@@ -495,6 +497,14 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
         // upload` gives it.
         BusBoard board(params, config);
         Upload(board, record);
+        if (joint) {
+          const host::ParamWriteOutcome limits =
+              host::SendJointLimits(board.client(), *joint, 500);
+          if (limits.end != host::ParamWriteEnd::kDone) {
+            throw std::runtime_error("sending " + joint->name +
+                                     "'s limits: " + limits.why);
+          }
+        }
         out[i] = RunTrial(board, PaperSine(spec.amplitude_deg, 5, spec.frequency_hz),
                           spec.keep_trace);
       } catch (...) {

@@ -268,11 +268,14 @@ struct TrialSpec {
 // A trial depends on nothing but its spec, so the outcomes, in spec order, are the
 // same bit for bit whatever the number of threads. `progress` is called once per
 // finished trial, serialised, in the order they finish. Rethrows the first spec's
-// exception, if any, after all have run.
+// exception, if any, after all have run. With a `joint` description, each board is
+// sent its limits after the record (host::SendJointLimits, as `mjc trial --robot`
+// sends them before anything moves); a board refusing them fails that spec.
 std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
                                     const ControlConfig& config,
                                     const Calibration& record,
                                     const std::vector<TrialSpec>& specs, int threads,
-                                    const ProgressFn& progress);
+                                    const ProgressFn& progress,
+                                    const host::RobotDescription* joint = nullptr);
 
 }  // namespace mjc::sim
