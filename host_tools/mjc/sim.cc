@@ -312,7 +312,8 @@ void AddSim(CLI::App& app) {
     double lost_s = 0;  // wall time the board fell behind its speed, in all
     bool warned = false;
     std::uint32_t bus_off_seen = 0;
-    bool down = false;  // the interface, as last said
+    std::uint32_t downs_said = 0;  // the interface going down, said
+    bool up_said = true;
     while (!stop && (seconds == 0 || static_cast<double>(ticks) * period < seconds)) {
       // The main loop's pass once a millisecond of board time: under emulation each
       // read of the socket is a system call, and reading it every 100 µs tick cost
@@ -339,14 +340,20 @@ void AddSim(CLI::App& app) {
         // An interface taken down and up again (ip link set ... down): the board rides
         // through it without its bus, as a real one whose cable is pulled; a motion
         // stops on its host timeout (fault 302).
-        if (port.down() != down) {
-          down = port.down();
-          std::fprintf(stderr,
-                       down
-                           ? "mjc sim: %s went down at %.4f s: the board goes on without "
-                             "its bus\n"
-                           : "mjc sim: %s is up again at %.4f s\n",
-                       iface.c_str(), static_cast<double>(ticks) * period);
+        // Counted, not sampled: a slow board can take the kernel's report and its
+        // first frame through again within one pass.
+        if (port.times_down() != downs_said) {
+          downs_said = port.times_down();
+          up_said = false;
+          std::fprintf(
+              stderr,
+              "mjc sim: %s went down at %.4f s: the board goes on without its bus\n",
+              iface.c_str(), static_cast<double>(ticks) * period);
+        }
+        if (!up_said && !port.down()) {
+          up_said = true;
+          std::fprintf(stderr, "mjc sim: %s is up again at %.4f s\n", iface.c_str(),
+                       static_cast<double>(ticks) * period);
         }
         if (board.in_application() != in_application) {
           // Another image, another pace (at --speed 0), and the counters start anew.

@@ -228,6 +228,7 @@ void VirtualBoard::PollLink() {
     }
     if (r.status == host::ReceiveStatus::kDown) {
       link_down_ = true;  // the socket stays bound: frames come once it is up again
+      ++times_down_;
       break;
     }
     if (!r) break;
@@ -330,14 +331,15 @@ void VirtualBoard::Report() {
           config_.description.c_str());
     }
   }
-  if (link_down_ != down_reported_) {
-    down_reported_ = link_down_;
-    if (link_down_) {
-      Say("%s went down at %.4f s: the board goes on without its bus",
-          config_.iface.c_str(), Seconds(chip_->now()));
-    } else {
-      Say("%s is up again at %.4f s", config_.iface.c_str(), Seconds(chip_->now()));
-    }
+  if (times_down_ != downs_reported_) {
+    downs_reported_ = times_down_;
+    up_reported_ = false;
+    Say("%s went down at %.4f s: the board goes on without its bus",
+        config_.iface.c_str(), Seconds(chip_->now()));
+  }
+  if (!up_reported_ && !link_down_) {
+    up_reported_ = true;
+    Say("%s is up again at %.4f s", config_.iface.c_str(), Seconds(chip_->now()));
   }
   for (; bus_off_reported_ < fw->node().counters().bus_off; ++bus_off_reported_) {
     Say("%s: bus-off at %.4f s: motor stopped (fault 303) until the host clears it",
