@@ -350,18 +350,23 @@ FirmwareUpdate::Step FirmwareUpdate::Fail(UpdateResult* r, Wait wait,
   return FailWith(r, Who() + " did not answer " + doing);
 }
 
+bool FirmwareUpdate::RunsApplication() const {
+  return info_ && info_->image == ImageKind::kApplication;
+}
+
+bool FirmwareUpdate::StaysSince(std::uint64_t starts) const {
+  return bootloader_starts_ != starts && status_ &&
+         (status_->state == BootState::kReady || status_->state == BootState::kReceiving);
+}
+
 FirmwareUpdate::Step FirmwareUpdate::AwaitReturn(UpdateResult* r,
                                                  const std::string& doing) {
   // The image is whole and committed, so a board that lost power or was reset after
   // the commit starts it when it comes back (its bootloader checks it and hands over):
   // listen one more silence for its return, and report what it runs.
   const std::string gone = Who() + " went silent " + doing + " (a power cut or a reset?)";
-  const auto started = [&] { return info_ && info_->image == ImageKind::kApplication; };
-  const auto stayed = [&] {
-    return bootloader_starts_ != starts_at_commit_ && status_ &&
-           (status_->state == BootState::kReady ||
-            status_->state == BootState::kReceiving);
-  };
+  const auto started = [&] { return RunsApplication(); };
+  const auto stayed = [&] { return StaysSince(starts_at_commit_); };
   const Wait w = Await([&] { return started() || stayed(); }, 0);
   if (w == Wait::kDone && started()) {
     if (info_->build == image_.header.commit && info_->dirty == image_.header.dirty) {
@@ -601,8 +606,7 @@ std::optional<BootResult> FirmwareUpdate::Command(BootRequest request,
     }
     // Unanswered because the board restarted after the commit (a power cut or a reset
     // within the silence): what it runs now is the answer.
-    if (committed_ && (bootloader_starts_ != starts_at_commit_ ||
-                       (info_ && info_->image == ImageKind::kApplication))) {
+    if (committed_ && (bootloader_starts_ != starts_at_commit_ || RunsApplication())) {
       *end = AwaitReturn(r, "at " + doing);
       return std::nullopt;
     }
@@ -672,12 +676,8 @@ FirmwareUpdate::Step FirmwareUpdate::StartImage(UpdateResult* r, bool new_image)
   // BoardInfo. A BootStatus of that new start that says it stays ends the wait.
   const std::uint64_t starts = bootloader_starts_;
   info_.reset();
-  const auto started = [&] { return info_ && info_->image == ImageKind::kApplication; };
-  const auto stayed = [&] {
-    return bootloader_starts_ != starts && status_ &&
-           (status_->state == BootState::kReady ||
-            status_->state == BootState::kReceiving);
-  };
+  const auto started = [&] { return RunsApplication(); };
+  const auto stayed = [&] { return StaysSince(starts); };
   const Wait w = Await([&] { return started() || stayed(); }, kStartMs);
   if (w == Wait::kDone && started()) return Step::kNext;
   if (w == Wait::kDone) {

@@ -189,6 +189,7 @@ bool WriteRunMat(const std::filesystem::path& dir, std::string* why) {
   std::vector<Var> unit_structs;
   for (const auto& path : csvs) {
     const std::string name = path.stem().string();
+    if (!ValidName(name)) continue;  // not one of the tools' records
     Table t;
     if (!ReadTable(path, &t, why)) return false;
     for (const auto& c : t.columns) {
@@ -197,7 +198,6 @@ bool WriteRunMat(const std::filesystem::path& dir, std::string* why) {
         return false;
       }
     }
-    if (!ValidName(name)) continue;  // not one of the tools' records
     Var record = StructVar(name.c_str(), t.columns);
     Var units = StructVar(name.c_str(), t.columns);
     if (!record || !units) {

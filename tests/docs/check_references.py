@@ -10,7 +10,7 @@ source, CMake, linker and shell file:
   `firmware/core/FIXED_POINT.md` or hal/stm32g4/mmio.h: it names a tracked file or folder,
   from the repository's root, from the referring file's folder, or as an include path
   (the tail of a tracked file's path). A path with a `*` must match at least one tracked
-  file. Not checked: output folders (`build/`, `out/`) and paths with placeholders
+  file. Not checked: output folders (`build/`, `out/`) and paths with variable parts
   (`<name>`, `$X`);
 - a bare source file name (`flash.cc`, `stm32g474.ld`): some tracked file has that name;
 - `file:Symbol` (`board.cc:BootEntry`): the file resolves and contains the symbol;

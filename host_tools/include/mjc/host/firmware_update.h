@@ -213,6 +213,10 @@ class FirmwareUpdate {
   // Silent after the commit: waits a silence more for the board's return and reports
   // what it runs then (the new image, its bootloader, or nothing heard).
   Step AwaitReturn(UpdateResult* r, const std::string& doing);
+  // The node's last BoardInfo is its application's.
+  bool RunsApplication() const;
+  // Its bootloader started anew since `starts` (bootloader_starts_ then) and stays.
+  bool StaysSince(std::uint64_t starts) const;
   Step FailWith(UpdateResult* r, const std::string& what);
   std::string Who() const;
   std::string Where() const;
