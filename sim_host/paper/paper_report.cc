@@ -59,43 +59,82 @@ double WindowEnergyErrorPct(const sim::WindowOutcome& w) {
 
 // Tables II–III's errors across amplitudes for one subject: RMSE (J) and NRMSE (%) of
 // the loading, unloading and net work, of the board against the plant's truth
-// (sim::SubjectSweep) or against the model's prediction (sim::ModelComparison).
+// (sim::SubjectSweep) or against the model's prediction (sim::ModelComparison), with
+// the reference's ranges and the noise floor they were judged against.
 struct SweepErrors {
   std::string subject;
   double rmse_load, rmse_unload, rmse_net, nrmse_load, nrmse_unload, nrmse_net;
+  double range_load, range_unload, range_net, noise_floor;
 };
 
 template <typename Compared>
 SweepErrors ErrorsOf(const Compared& c) {
-  return {c.subject,    c.rmse_load,    c.rmse_unload, c.rmse_net,
-          c.nrmse_load, c.nrmse_unload, c.nrmse_net};
+  return {c.subject,      c.rmse_load,    c.rmse_unload,  c.rmse_net,
+          c.nrmse_load,   c.nrmse_unload, c.nrmse_net,    c.range_load,
+          c.range_unload, c.range_net,    c.noise_floor_J};
 }
 
-// The "rmse_J" and "nrmse_pct" members of a subject's entry in results.json.
+// A normalised error as a table prints it: the percentage, or, when the reference's
+// range was within the noise (sim::EnergyNoiseFloor), why there is none.
+std::string NrmseCell(double pct, double range_J, double floor_J) {
+  if (std::isfinite(pct)) return Format("%.2f%%", pct);
+  return "n/a (range " + Format("%.4f", range_J * kMilli) +
+         " mJ, within the noise floor " + Format("%.4f", floor_J * kMilli) + " mJ)";
+}
+
+// A board's or the truth's η beside the loading work it divides by: n/a, with the
+// reason, when that work is at or below the floor (no ratio worth taking), or when a
+// window of the point had no η at all.
+std::string EtaCell(const host::Stats& eta, double load_J, double floor_J,
+                    const char* format) {
+  if (!std::isfinite(eta.mean)) return "n/a (a window without loading work)";
+  if (load_J <= floor_J) {
+    return "n/a (loading " + Format("%.4f", load_J * kMilli) +
+           " mJ, within the noise floor " + Format("%.4f", floor_J * kMilli) + " mJ)";
+  }
+  return Format(format, eta.mean);
+}
+
+// The "rmse_J", "nrmse_pct" (null where not judged), "range_J" and "noise_floor_J"
+// members of a subject's entry in results.json.
 void AddErrorsJson(const SweepErrors& e, nlohmann::json* subject) {
+  auto judged = [](double pct) {
+    return std::isfinite(pct) ? nlohmann::json(pct) : nlohmann::json(nullptr);
+  };
   (*subject)["rmse_J"] = {
       {"load", e.rmse_load}, {"unload", e.rmse_unload}, {"net", e.rmse_net}};
-  (*subject)["nrmse_pct"] = {
-      {"load", e.nrmse_load}, {"unload", e.nrmse_unload}, {"net", e.nrmse_net}};
+  (*subject)["nrmse_pct"] = {{"load", judged(e.nrmse_load)},
+                             {"unload", judged(e.nrmse_unload)},
+                             {"net", judged(e.nrmse_net)}};
+  (*subject)["range_J"] = {
+      {"load", e.range_load}, {"unload", e.range_unload}, {"net", e.range_net}};
+  (*subject)["noise_floor_J"] = e.noise_floor;
 }
 
-// The table's header and one row per subject, in Markdown; the same rows to `csv`.
+// The table's header and one row per subject, in Markdown; the same rows to `csv`
+// (an NRMSE not judged is nan there, beside the ranges and the floor).
 std::string ErrorTable(const std::vector<SweepErrors>& rows, const fs::path& csv) {
   std::string text =
       "| subject | RMSE loading (mJ) | RMSE unloading (mJ) | RMSE net (mJ) | NRMSE "
       "loading | NRMSE unloading | NRMSE net |\n|---|---|---|---|---|---|---|\n";
   CsvTable table({"subject", "rmse_load_mJ", "rmse_unload_mJ", "rmse_net_mJ",
-                  "nrmse_load_pct", "nrmse_unload_pct", "nrmse_net_pct"});
+                  "nrmse_load_pct", "nrmse_unload_pct", "nrmse_net_pct", "range_load_mJ",
+                  "range_unload_mJ", "range_net_mJ", "noise_floor_mJ"});
   for (const SweepErrors& e : rows) {
     text += "| " + e.subject + " | " + Format("%.4f", e.rmse_load * kMilli) + " | " +
             Format("%.4f", e.rmse_unload * kMilli) + " | " +
-            Format("%.4f", e.rmse_net * kMilli) + " | " + Format("%.2f%%", e.nrmse_load) +
-            " | " + Format("%.2f%%", e.nrmse_unload) + " | " +
-            Format("%.2f%%", e.nrmse_net) + " |\n";
+            Format("%.4f", e.rmse_net * kMilli) + " | " +
+            NrmseCell(e.nrmse_load, e.range_load, e.noise_floor) + " | " +
+            NrmseCell(e.nrmse_unload, e.range_unload, e.noise_floor) + " | " +
+            NrmseCell(e.nrmse_net, e.range_net, e.noise_floor) + " |\n";
     table.AddRow({e.subject, CsvTable::Number(e.rmse_load * kMilli),
                   CsvTable::Number(e.rmse_unload * kMilli),
                   CsvTable::Number(e.rmse_net * kMilli), CsvTable::Number(e.nrmse_load),
-                  CsvTable::Number(e.nrmse_unload), CsvTable::Number(e.nrmse_net)});
+                  CsvTable::Number(e.nrmse_unload), CsvTable::Number(e.nrmse_net),
+                  CsvTable::Number(e.range_load * kMilli),
+                  CsvTable::Number(e.range_unload * kMilli),
+                  CsvTable::Number(e.range_net * kMilli),
+                  CsvTable::Number(e.noise_floor * kMilli)});
   }
   table.Write(csv);
   return text;
@@ -462,8 +501,9 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
                            .reference_load = p.truth_load.mean,
                            .reference_unload = p.truth_unload.mean,
                            .reference_net = p.truth_net.mean};
-      Print(WorkCells(work) + " | " + Format("%.1f%%", p.eta.mean) + " | " +
-            Format("%.1f%%", p.truth_eta.mean) + " |\n");
+      Print(WorkCells(work) + " | " +
+            EtaCell(p.eta, p.load.mean, s.noise_floor_J, "%.1f%%") + " | " +
+            EtaCell(p.truth_eta, p.truth_load.mean, s.noise_floor_J, "%.1f%%") + " |\n");
       std::vector<std::string> row = WorkCsvCells(s.subject, work);
       row.insert(row.end(),
                  {CsvTable::Number(p.eta.mean), CsvTable::Number(p.truth_eta.mean),
@@ -538,19 +578,31 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
   json_["attachment_fit"] = fits;
 
   // Fidelity over the whole sweep.
+  // η only where it can be judged (EtaCell): a window with loading work within the
+  // noise floor has none worth comparing, and is counted instead.
   double worst_power = 0, worst_energy = 0, worst_eta = 0;
+  int eta_unjudged = 0;
   for (const auto& s : sweeps) {
     for (const auto& p : s.points) {
       worst_power = std::max(worst_power, p.power_rmse_pct_peak);
       for (const auto& w : p.flexions) {
         worst_energy = std::max(worst_energy, WindowEnergyErrorPct(w));
-        worst_eta = std::max(worst_eta, std::fabs(w.eta - w.truth_eta));
+        if (std::isfinite(w.eta) && std::isfinite(w.truth_eta) &&
+            w.truth_load > s.noise_floor_J) {
+          worst_eta = std::max(worst_eta, std::fabs(w.eta - w.truth_eta));
+        } else {
+          ++eta_unjudged;
+        }
       }
     }
   }
   Print("\nfidelity over the sweep: power RMSE ≤ " + Format("%.2f", worst_power) +
         "% of peak, window energy within " + Format("%.2f", worst_energy) +
-        "%, η within " + Format("%.2f", worst_eta) + " points\n");
+        "%, η within " + Format("%.2f", worst_eta) + " points" +
+        (eta_unjudged > 0 ? " (" + std::to_string(eta_unjudged) +
+                                " windows with loading work too small to judge η)"
+                          : std::string()) +
+        "\n");
   if (worst_energy > kWindowEnergyBoundPct) {
     Warn("window energies up to " + Format("%.1f", worst_energy) +
          " % off the plant's truth, beyond the " + Format("%.0f", kWindowEnergyBoundPct) +
@@ -561,7 +613,8 @@ void Report::Amplitude(const std::vector<sim::SubjectSweep>& sweeps) {
   }
   json_["fidelity"] = {{"power_rmse_pct_peak", worst_power},
                        {"window_energy_err_pct", worst_energy},
-                       {"eta_err_pt", worst_eta}};
+                       {"eta_err_pt", worst_eta},
+                       {"eta_windows_unjudged", eta_unjudged}};
 
   work_subjects_.clear();
   for (const auto& sw : sweeps) work_subjects_.push_back(sw.subject);

@@ -129,6 +129,57 @@ TEST(SimTrial, ElasticInterfaceReadsNoLoss) {
   }
 }
 
+// Tables II–III's normalised errors, from points built by hand (no simulation): the
+// RMSE over the reference's range where that range stands above the noise floor, and
+// no percentage (NaN, with the range and the floor) where it does not — the net work of
+// an elastic attachment, ~0 at every amplitude.
+AmplitudePoint HandPoint(double amplitude_deg, double load, double truth_load, double net,
+                         double truth_net, double se) {
+  AmplitudePoint p;
+  p.amplitude_deg = amplitude_deg;
+  p.load = {3, load, se * std::sqrt(3.0), se};
+  p.unload = {3, -(load - net), 0, 0};
+  p.net = {3, net, se * std::sqrt(3.0), se};
+  p.truth_load = {3, truth_load, 0, 0};
+  p.truth_unload = {3, -(truth_load - truth_net), 0, 0};
+  p.truth_net = {3, truth_net, 0, 0};
+  return p;
+}
+
+TEST(SimTables, ANetWorkWithoutRangeIsNotNormalised) {
+  // An elastic attachment's work (J): loading grows with amplitude, net stays at 3 µJ
+  // within 0.2 µJ; the board's net a few µJ off.
+  const std::vector<AmplitudePoint> points = {
+      HandPoint(6, 0.245e-3, 0.245e-3, 0.003e-3, 0.0030e-3, 0.5e-6),
+      HandPoint(15, 2.014e-3, 2.011e-3, 0.006e-3, 0.0031e-3, 0.5e-6),
+      HandPoint(25, 5.926e-3, 5.915e-3, 0.013e-3, 0.0032e-3, 1.0e-6)};
+  const SubjectSweep s = SummariseSweep("elastic", points);
+  // The floor: 1 % of the largest loading work (59.15 µJ) beats 2 SE (2 µJ).
+  EXPECT_DOUBLE_EQ(s.noise_floor_J, 0.01 * 5.915e-3);
+  EXPECT_NEAR(s.range_net, 0.0002e-3, 1e-12);
+  EXPECT_TRUE(std::isnan(s.nrmse_net)) << s.nrmse_net;
+  // The RMSE itself is still given.
+  const double net_rmse =
+      std::sqrt((0.0 + std::pow(0.0029e-3, 2) + std::pow(0.0098e-3, 2)) / 3);
+  EXPECT_NEAR(s.rmse_net, net_rmse, 1e-12);
+  // The loading work's range is 5.67 mJ: normalised, by hand.
+  const double load_rmse =
+      std::sqrt((0.0 + std::pow(0.003e-3, 2) + std::pow(0.011e-3, 2)) / 3);
+  EXPECT_NEAR(s.nrmse_load, 100 * load_rmse / (5.915e-3 - 0.245e-3), 1e-9);
+}
+
+TEST(SimTables, TheBoardsScatterSetsTheFloorWhenItIsLarger) {
+  // A range of 40 µJ against the board's SE of 25 µJ at one amplitude (2 SE = 50 µJ):
+  // not judged, though it is 6 % of the loading work.
+  const std::vector<AmplitudePoint> points = {
+      HandPoint(6, 0.30e-3, 0.30e-3, 0.10e-3, 0.10e-3, 1e-6),
+      HandPoint(25, 0.65e-3, 0.66e-3, 0.15e-3, 0.14e-3, 25e-6)};
+  const SubjectSweep s = SummariseSweep("scattered", points);
+  EXPECT_DOUBLE_EQ(s.noise_floor_J, 2 * 25e-6);
+  EXPECT_TRUE(std::isnan(s.nrmse_net));
+  EXPECT_TRUE(std::isfinite(s.nrmse_load));  // range 360 µJ
+}
+
 TEST(SimTrial, TheVelocityModelTakesTheBoardsOwnFitOfTheAttachment) {
   // A prior a third of subject 2's attachment (k 1.8, b 0.1 against 5.5, 0.29: a model
   // that far off doubles the plain slope's power error, SIGNAL_CHAIN.md). The

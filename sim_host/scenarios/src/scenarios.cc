@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <mutex>
 #include <numbers>
 #include <stdexcept>
@@ -69,19 +70,22 @@ void SetWireTiming(const Core& core, Wire* wire) {
   wire->rest_100ms = static_cast<std::uint8_t>(core.rest_ms / 100);
 }
 
-// RMSE of `measured` against `reference` (into *rmse) and normalised to the
-// reference's range, % (the paper's NRMSE; 0 for a reference without range).
+// RMSE of `measured` against `reference` (into *rmse), and normalised to the
+// reference's range (into *range), % (the paper's NRMSE): NaN when the range is at or
+// below `floor` (EnergyNoiseFloor).
 double Nrmse(const std::vector<double>& measured, const std::vector<double>& reference,
-             double* rmse) {
+             double floor, double* rmse, double* range) {
   *rmse = host::Rmse(measured, reference);
-  const double range = host::Range(reference);
-  return range > 0 ? 100.0 * *rmse / range : 0.0;
+  *range = host::Range(reference);
+  return *range > floor ? 100.0 * *rmse / *range
+                        : std::numeric_limits<double>::quiet_NaN();
 }
 
-// Tables II–III's errors across amplitudes, into *out's rmse_* (J) and nrmse_* (%): the
-// board's mean loading, unloading and net work at each amplitude of `measured` against
-// the truth at the same amplitude of `reference` (the board's own sweep, for its errors
-// against the plant, or the model's predicted sweep).
+// Tables II–III's errors across amplitudes, into *out's rmse_* (J), nrmse_* (%),
+// range_* (J) and noise_floor_J: the board's mean loading, unloading and net work at
+// each amplitude of `measured` against the truth at the same amplitude of `reference`
+// (the board's own sweep, for its errors against the plant, or the model's predicted
+// sweep).
 template <class Errors>
 void SetEnergyErrors(const std::vector<AmplitudePoint>& measured,
                      const std::vector<AmplitudePoint>& reference, Errors* out) {
@@ -94,13 +98,18 @@ void SetEnergyErrors(const std::vector<AmplitudePoint>& measured,
     ref_unload.push_back(reference[i].truth_unload.mean);
     ref_net.push_back(reference[i].truth_net.mean);
   }
-  out->nrmse_load = Nrmse(load, ref_load, &out->rmse_load);
-  out->nrmse_unload = Nrmse(unload, ref_unload, &out->rmse_unload);
-  out->nrmse_net = Nrmse(net, ref_net, &out->rmse_net);
+  const double floor = EnergyNoiseFloor(measured, reference);
+  out->noise_floor_J = floor;
+  out->nrmse_load = Nrmse(load, ref_load, floor, &out->rmse_load, &out->range_load);
+  out->nrmse_unload =
+      Nrmse(unload, ref_unload, floor, &out->rmse_unload, &out->range_unload);
+  out->nrmse_net = Nrmse(net, ref_net, floor, &out->rmse_net, &out->range_net);
 }
 
+// NaN without loading work: no ratio to take.
 double EtaPercent(double load, double unload) {
-  return load > 0 ? (1.0 - std::fabs(unload) / load) * 100.0 : 0.0;
+  return load > 0 ? (1.0 - std::fabs(unload) / load) * 100.0
+                  : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace
@@ -282,7 +291,8 @@ TrialOutcome RunTrial(BusBoard& bus, const SineConfig& sine, bool keep_trace,
     wo.load = w.loading_J;
     wo.unload = w.unloading_J;
     wo.net = w.net_J();
-    wo.eta = w.eta_percent;
+    // The board says when its η means nothing (no loading work to divide by).
+    wo.eta = w.eta_valid ? w.eta_percent : std::numeric_limits<double>::quiet_NaN();
     wo.truth_load = truth_energy[p] - truth_energy[s];
     wo.truth_unload = truth_energy[e] - truth_energy[p];
     wo.truth_net = truth_energy[e] - truth_energy[s];
@@ -386,6 +396,18 @@ AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& t) {
   pt.power_rmse_pct_peak =
       t.truth_peak_power_W > 0 ? 100.0 * t.power_rmse_W / t.truth_peak_power_W : 0.0;
   return pt;
+}
+
+double EnergyNoiseFloor(const std::vector<AmplitudePoint>& measured,
+                        const std::vector<AmplitudePoint>& reference) {
+  double floor = 0;
+  for (const AmplitudePoint& p : measured) {
+    floor = std::max({floor, 2 * p.load.se, 2 * p.unload.se, 2 * p.net.se});
+  }
+  for (const AmplitudePoint& p : reference) {
+    floor = std::max(floor, kEnergyFloorOfLoading * std::fabs(p.truth_load.mean));
+  }
+  return floor;
 }
 
 SubjectSweep SummariseSweep(const std::string& subject,

@@ -76,7 +76,8 @@ CalibrationOutcome RunCalibration(BusBoard& board, const RampedSineConfig& sweep
 struct WindowOutcome {
   Motion motion = Motion::kFlexion;
   std::uint16_t repetition = 0;
-  // Board estimate (J, %), as its window frames carried it.
+  // Board estimate (J, %), as its window frames carried it. η is NaN where there is no
+  // ratio to take (no loading work: the board's eta_valid clear; the same for truth).
   double load = 0, unload = 0, net = 0, eta = 0;
   // Plant ground truth over the same ticks.
   double truth_load = 0, truth_unload = 0, truth_net = 0, truth_eta = 0;
@@ -182,12 +183,31 @@ struct AmplitudePoint {
   std::vector<WindowOutcome> flexions;  // the analysed ones
 };
 
+// When a normalised error means something. The paper normalises Tables II–III's RMSE
+// to the reference's range across amplitudes; a range the board cannot resolve (the
+// net work of an elastic attachment: ~0 at every amplitude) turns any error into
+// thousands of percent. A range counts only above the noise floor: twice the largest
+// standard error of the board's per-amplitude means (a smaller difference between
+// amplitudes is inside the board's own scatter), and at least kEnergyFloorOfLoading of
+// the largest reference loading work (a variation smaller than that is, at the
+// experiment's scale, none). Below it the NRMSE is NaN, and the tables print the range
+// and the floor instead of a percentage. The same floor decides whether a window's η
+// can be judged: η = 1 − |unloading|/loading of a loading work at or below it is the
+// ratio of two noises.
+inline constexpr double kEnergyFloorOfLoading = 0.01;
+// The floor of `measured`'s board means against `reference`'s truth (J).
+double EnergyNoiseFloor(const std::vector<AmplitudePoint>& measured,
+                        const std::vector<AmplitudePoint>& reference);
+
 struct SubjectSweep {
   std::string subject;
   std::vector<AmplitudePoint> points;
-  // RMSE board vs truth across amplitudes (J), and normalised to the truth's range (%).
+  // RMSE board vs truth across amplitudes (J), and normalised to the truth's range (%;
+  // NaN when that range is within the noise: EnergyNoiseFloor).
   double rmse_load = 0, rmse_unload = 0, rmse_net = 0;
   double nrmse_load = 0, nrmse_unload = 0, nrmse_net = 0;
+  double range_load = 0, range_unload = 0, range_net = 0;  // the truth's (J)
+  double noise_floor_J = 0;
   InterfaceTruth truth;  // the subject's attachment (TrueInterface at frequency_hz)
   double frequency_hz = kPaperFrequencyHz;
 };
@@ -238,9 +258,12 @@ struct ModelComparison {
   plant::InterfaceParams model;
   std::vector<ModelPoint> points;
   // RMSE measurement vs prediction across amplitudes (J), and normalised to the
-  // prediction's range (%), as the paper's Tables II and III.
+  // prediction's range (%), as the paper's Tables II and III (NaN when that range is
+  // within the noise: EnergyNoiseFloor).
   double rmse_load = 0, rmse_unload = 0, rmse_net = 0;
   double nrmse_load = 0, nrmse_unload = 0, nrmse_net = 0;
+  double range_load = 0, range_unload = 0, range_net = 0;  // the prediction's (J)
+  double noise_floor_J = 0;
 };
 
 // `measured`: the board's sweep on the subject; `predicted`: the same amplitudes on the
