@@ -143,6 +143,14 @@ std::unique_ptr<SocketCanLink> SocketCanLink::Open(const std::string& interface,
 
 SocketCanLink::~SocketCanLink() { ::close(fd_); }
 
+void SocketCanLink::NoteDownNow() {
+  NoteDown();
+  // The same clock as SO_TIMESTAMP.
+  down_noted_us_ = std::chrono::duration_cast<std::chrono::microseconds>(
+                       std::chrono::system_clock::now().time_since_epoch())
+                       .count();
+}
+
 bool SocketCanLink::DoSend(const protocol::CanFrame& frame, std::string* why) {
   canfd_frame raw{};
   raw.can_id = frame.id & CAN_SFF_MASK;
@@ -166,7 +174,14 @@ bool SocketCanLink::DoSend(const protocol::CanFrame& frame, std::string* why) {
     const ssize_t n = ::write(fd_, &raw, size);
     if (n == static_cast<ssize_t>(size)) {
       ++stats_.sent;
+      NoteUp();
       return true;
+    }
+    if (n < 0 && errno == ENETDOWN) {
+      Say(why, Errno("cannot send on '" + interface_ + "'"));
+      NoteDownNow();
+      ++stats_.tx_failed;
+      return false;
     }
     if (n >= 0 || (errno != ENOBUFS && errno != EAGAIN)) break;
     const bool queue_full = errno == ENOBUFS;
@@ -204,6 +219,7 @@ ReceiveResult SocketCanLink::DoReceive(int timeout_ms, std::string* why) {
     const ssize_t n = ::recvmsg(fd_, &message, 0);
     if (n < 0) {
       if (errno == ENETDOWN) {
+        NoteDownNow();
         Say(why, "'" + interface_ + "' went down");
         return {ReceiveStatus::kDown, {}};
       }
@@ -249,6 +265,9 @@ ReceiveResult SocketCanLink::DoReceive(int timeout_ms, std::string* why) {
       }
     }
     ++stats_.received;
+    // A frame received before the interface went down can still sit in the socket's
+    // queue after the outage was noted: only a later one says it is up again.
+    if (r.timestamp_us > down_noted_us_) NoteUp();
     return out;
   }
 }

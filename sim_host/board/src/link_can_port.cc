@@ -4,10 +4,7 @@ namespace mjc::sim {
 
 bool LinkCanPort::DoSend(const protocol::CanFrame& frame) {
   std::string why;
-  if (link_->Send(frame, &why)) {
-    down_ = false;  // up again
-    return true;
-  }
+  if (link_->Send(frame, &why)) return true;
   // The link already waited for room (ENOBUFS): the frame is lost, counted, and the
   // board goes on, as a controller whose frame never gets on the bus.
   ++send_failures_;
@@ -18,14 +15,12 @@ bool LinkCanPort::DoSend(const protocol::CanFrame& frame) {
 bool LinkCanPort::Judge(const host::ReceiveResult& r, const std::string& why) {
   switch (r.status) {
     case host::ReceiveStatus::kFrame:
-      down_ = false;  // up again
       return true;
     case host::ReceiveStatus::kTimeout:
       return false;
     case host::ReceiveStatus::kDown:
-      // The socket stays bound; frames come again once the interface is up.
-      if (!down_) ++times_down_;
-      down_ = true;
+      // The socket stays bound; frames come again once the interface is up (the link
+      // keeps the state).
       error_ = why;
       return false;
     case host::ReceiveStatus::kError:

@@ -210,11 +210,7 @@ void VirtualBoard::OnTransmit(const g474model::CanBusFrame& f) {
   std::string why;
   // The link already waited for room: the frame is lost, counted, as a controller's
   // frame that never gets on the bus.
-  if (link_->Send(frame, &why)) {
-    link_down_ = false;  // up again
-  } else {
-    ++send_failures_;
-  }
+  if (!link_->Send(frame, &why)) ++send_failures_;
 }
 
 void VirtualBoard::PollLink() {
@@ -226,13 +222,9 @@ void VirtualBoard::PollLink() {
     if (r.status == host::ReceiveStatus::kError) {
       throw std::runtime_error(config_.iface + ": " + why);
     }
-    if (r.status == host::ReceiveStatus::kDown) {
-      link_down_ = true;  // the socket stays bound: frames come once it is up again
-      ++times_down_;
-      break;
-    }
+    // Down: the socket stays bound, frames come once it is up again (the link keeps
+    // the state, Report says it).
     if (!r) break;
-    link_down_ = false;
     g474model::CanBusFrame f;
     f.id = r->frame.id;
     f.fd = r->frame.fd || r->flags != 0;
@@ -331,13 +323,13 @@ void VirtualBoard::Report() {
           config_.description.c_str());
     }
   }
-  if (times_down_ != downs_reported_) {
-    downs_reported_ = times_down_;
+  if (link_ != nullptr && link_->stats().went_down != downs_reported_) {
+    downs_reported_ = link_->stats().went_down;
     up_reported_ = false;
     Say("%s went down at %.4f s: the board goes on without its bus",
         config_.iface.c_str(), Seconds(chip_->now()));
   }
-  if (!up_reported_ && !link_down_) {
+  if (!up_reported_ && link_ != nullptr && !link_->down()) {
     up_reported_ = true;
     Say("%s is up again at %.4f s", config_.iface.c_str(), Seconds(chip_->now()));
   }

@@ -68,6 +68,7 @@ struct LinkStats {
   std::uint64_t tx_failed = 0;     // sends given up on
   std::uint64_t rx_dropped = 0;    // frames the kernel dropped for this socket
                                    // (receive buffer full; SO_RXQ_OVFL)
+  std::uint64_t went_down = 0;     // times the interface went down (see CanLink::down)
 };
 
 struct IdFilter {
@@ -99,13 +100,28 @@ class CanLink {
 
   const LinkStats& stats() const { return stats_; }
 
+  // The interface is down: a send or a receive met ENETDOWN, and no frame has gone or
+  // come since. The kernel reports an interface going down once per socket, to whichever
+  // call comes first (a write consumes it as well as a read), so both directions feed
+  // this one state; a board that sends often would otherwise never see it on receive.
+  bool down() const { return down_; }
+
   // Where the frames go, for messages: the interface's name ("vcan0").
   virtual std::string Name() const { return "the in-process bus"; }
 
  protected:
   LinkStats stats_;
 
+  // For the implementations: the interface went down (counted once per outage), or a
+  // frame went or came, so it is up.
+  void NoteDown() {
+    if (!down_) ++stats_.went_down;
+    down_ = true;
+  }
+  void NoteUp() { down_ = false; }
+
  private:
+  bool down_ = false;
   virtual bool DoSend(const protocol::CanFrame& frame, std::string* why) = 0;
   virtual ReceiveResult DoReceive(int timeout_ms, std::string* why) = 0;
   virtual bool DoSetFilters(std::span<const IdFilter> filters, std::string* why) = 0;
@@ -129,9 +145,12 @@ class SocketCanLink final : public CanLink {
   bool DoSend(const protocol::CanFrame& frame, std::string* why) override;
   ReceiveResult DoReceive(int timeout_ms, std::string* why) override;
   bool DoSetFilters(std::span<const IdFilter> filters, std::string* why) override;
+  // NoteDown, remembering when (CLOCK_REALTIME µs, as SO_TIMESTAMP).
+  void NoteDownNow();
 
   int fd_;
   std::string interface_;
+  std::int64_t down_noted_us_ = 0;
 };
 
 // Links that deliver each sent frame to every other link of the same bus, in order.

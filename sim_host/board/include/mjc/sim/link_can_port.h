@@ -27,8 +27,10 @@ class LinkCanPort final : public hal::CanPort {
   std::uint32_t send_failures() const { return send_failures_; }
   // The interface is down (the link said so, and no frame has come or gone since): the
   // board rides through, as a real one whose bus is unplugged. Times it went down.
-  bool down() const { return down_; }
-  std::uint32_t times_down() const { return times_down_; }
+  bool down() const { return link_->down(); }
+  std::uint32_t times_down() const {
+    return static_cast<std::uint32_t>(link_->stats().went_down);
+  }
 
   // Waits up to timeout_ms for a frame, kept for the next Receive: true when one is
   // there. For a board with nothing to do until a frame comes (the simulated
@@ -49,8 +51,6 @@ class LinkCanPort final : public hal::CanPort {
   std::uint32_t received_ = 0;
   std::uint32_t send_failures_ = 0;
   bool failed_ = false;
-  bool down_ = false;
-  std::uint32_t times_down_ = 0;
   std::string error_;
 };
 

@@ -190,11 +190,11 @@ class VirtualBoard {
   bool announced_ = false;
   bool boot_reported_ = false;
   std::uint32_t bus_off_reported_ = 0;
-  // The interface is down (ENETDOWN, until a frame comes or goes again): the board rides
-  // through without its bus. Counted, so a slow board that takes the kernel's report
-  // and its first frame through again between two reports still says both.
-  bool link_down_ = false, up_reported_ = true;
-  std::uint32_t times_down_ = 0, downs_reported_ = 0;
+  // The interface going down and up again (the link counts the outages and keeps the
+  // state): the board rides through without its bus and says each, even when both
+  // fall between two reports.
+  bool up_reported_ = true;
+  std::uint64_t downs_reported_ = 0;
   int resets_ = 0;
   std::uint64_t ticks_since_start_ = 0;  // tick interrupts since the last (re)start
   std::function<void(const plant::Plant&, std::uint32_t)> step_observer_;
