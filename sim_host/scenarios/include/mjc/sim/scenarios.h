@@ -202,7 +202,9 @@ SubjectSweep RunAmplitudeSweep(BusBoard& board, const plant::PlantParams& subjec
 
 // The statistics of the two functions above, from trials already run.
 RepeatabilityOutcome SummariseRepeatability(std::vector<TrialOutcome> trials);
-AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& trial);
+// `repetitions`: the trial's cycles, of which the middle three are analysed.
+AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& trial,
+                              std::uint16_t repetitions = 5);
 SubjectSweep SummariseSweep(const std::string& subject,
                             std::vector<AmplitudePoint> points);
 
@@ -262,6 +264,12 @@ struct TrialSpec {
   std::uint64_t noise_seed = 1;
   std::string label;  // for progress lines
   double frequency_hz = kPaperFrequencyHz;
+  // Cycles of the trial (PaperSine's repetitions).
+  std::uint16_t repetitions = 5;
+  // A plant and calibration record of the spec's own instead of RunTrials' `robot` and
+  // `record` (a robot variant calibrated for itself); they must outlive RunTrials.
+  const plant::PlantParams* robot = nullptr;
+  const Calibration* record = nullptr;
 };
 
 // Runs every spec on `threads` threads (0: one per core; 1: in the calling thread).
