@@ -481,7 +481,8 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
                                     const Calibration& record,
                                     const std::vector<TrialSpec>& specs, int threads,
                                     const ProgressFn& progress,
-                                    const host::RobotDescription* joint) {
+                                    const host::RobotDescription* joint,
+                                    const TrialFinishedFn& finished) {
   std::vector<TrialOutcome> out(specs.size());
   std::vector<std::exception_ptr> errors(specs.size());
   std::atomic<std::size_t> next{0};
@@ -512,11 +513,20 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
       } catch (...) {
         errors[i] = std::current_exception();
       }
-      if (progress) {
+      if (progress || finished) {
         const std::lock_guard<std::mutex> lock(progress_mutex);
         ++done;
-        progress(spec.label,
-                 static_cast<double>(done) / static_cast<double>(specs.size()));
+        if (finished && !errors[i]) {
+          try {
+            finished(i, out[i]);
+          } catch (...) {
+            errors[i] = std::current_exception();
+          }
+        }
+        if (progress) {
+          progress(spec.label,
+                   static_cast<double>(done) / static_cast<double>(specs.size()));
+        }
       }
     }
   };

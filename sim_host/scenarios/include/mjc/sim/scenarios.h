@@ -279,11 +279,16 @@ struct TrialSpec {
 // exception, if any, after all have run. With a `joint` description, each board is
 // sent its limits after the record (host::SendJointLimits, as `mjc trial --robot`
 // sends them before anything moves); a board refusing them fails that spec.
+// `finished`, when given, is called with each spec's index and outcome as it ends
+// (before `progress`, serialised with it), so a caller can keep what ended even when a
+// later spec fails or the process dies.
+using TrialFinishedFn = std::function<void(std::size_t index, const TrialOutcome&)>;
 std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
                                     const ControlConfig& config,
                                     const Calibration& record,
                                     const std::vector<TrialSpec>& specs, int threads,
                                     const ProgressFn& progress,
-                                    const host::RobotDescription* joint = nullptr);
+                                    const host::RobotDescription* joint = nullptr,
+                                    const TrialFinishedFn& finished = nullptr);
 
 }  // namespace mjc::sim
