@@ -54,6 +54,6 @@ refused "--subjects is set in the sweep's grid file" \
 }
 again=$("$paper" --quiet --scenario sweep --grid "$good" --out "$dir/out" 2>&1 >/dev/null)
 case $again in
-  *"1 points, 1 resumed from"*"0 to run"*) echo "resumed: $again" ;;
+  *"1 grid points, 1 resumed from"*"0 to run"*) echo "resumed: $again" ;;
   *) echo "the rerun did not resume: $again"; exit 1 ;;
 esac
