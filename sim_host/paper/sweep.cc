@@ -346,7 +346,8 @@ struct Row {
 
 std::string Cell(double v, const char* format = "%.3g") { return Fixed(format, v); }
 
-void WriteSummary(const fs::path& out, const Resolved& grid, bool quiet) {
+// The summary's table also goes to stdout, as the other scenarios print theirs.
+void WriteSummary(const fs::path& out, const Resolved& grid) {
   std::vector<Row> rows;
   std::vector<std::size_t> missing;
   for (std::size_t i = 0; i < grid.points; ++i) {
@@ -517,7 +518,8 @@ void WriteSummary(const fs::path& out, const Resolved& grid, bool quiet) {
     }
   }
   host::ReplaceFile(out / "sweep.md", md);
-  if (!quiet) std::fputs(md.c_str(), stdout);
+  std::fputs(md.c_str(), stdout);
+  std::fflush(stdout);
   if (failed) throw std::runtime_error(std::to_string(failed) + " figures not made");
 }
 
@@ -951,7 +953,7 @@ int RunSweep(const SweepPlan& plan, const SweepRunOptions& options) {
                  options.shard.index, options.shard.count, options.out.string().c_str());
     return 0;
   }
-  WriteSummary(options.out, grid, options.quiet);
+  WriteSummary(options.out, grid);
   return 0;
 }
 
@@ -995,9 +997,10 @@ int MergeSweeps(const std::vector<fs::path>& shards, const fs::path& out, bool q
                         *host::ReadFileText(PointPath(src, p, ext)));
     }
   }
-  std::fprintf(stderr, "merged %zu points of grid %s from %zu folders into %s\n",
-               grid.points, grid.digest.c_str(), shards.size(), out.string().c_str());
-  WriteSummary(out, grid, quiet);
+  if (!quiet)
+    std::fprintf(stderr, "merged %zu points of grid %s from %zu folders into %s\n",
+                 grid.points, grid.digest.c_str(), shards.size(), out.string().c_str());
+  WriteSummary(out, grid);
   return 0;
 }
 
