@@ -33,8 +33,9 @@ constexpr std::string_view kModelNames[] = {"kelvin_voigt", "standard_linear_sol
 // The ranges: the plant's own for the attachment (plant/params.h); the amplitude within
 // the ±30° the calibration sweep covers; the drive frequencies the scenarios are checked
 // at; spring rates that keep K = 2·k·r_j² within 0.2–2 N·m/rad at r_j = 1 cm (the
-// default spring is 3150 N/m); a slack the calibration fit can find and that still
-// leaves the cable taut over the smallest amplitude.
+// default spring is 3150 N/m); slacks from a quarter to five times the default 2°, all
+// of which the calibration fit finds (a slack wider than the amplitude leaves the cable
+// idle: such a point's truth is ~0 and its board numbers are noise, which is a finding).
 constexpr SweepAxisInfo kAxes[kSweepAxes] = {
     {"stiffness_Nm_per_rad", "N·m/rad", 0.0, 1000.0},
     {"damping_Nm_s_per_rad", "N·m·s/rad", 0.0, 100.0},
@@ -97,6 +98,18 @@ std::size_t Index(SweepAxis a) { return static_cast<std::size_t>(a); }
 std::string ValueText(SweepAxis axis, double v) {
   if (axis == SweepAxis::kModel) return std::string(kModelNames[v > 0.5 ? 1 : 0]);
   return Num(v);
+}
+
+// A point's values on the axes that vary, "key=value ...", for messages.
+std::string PointAxes(const std::array<std::vector<double>, kSweepAxes>& values,
+                      const std::array<double, kSweepAxes>& value) {
+  std::string out;
+  for (std::size_t a = 0; a < kSweepAxes; ++a) {
+    if (values[a].size() < 2) continue;
+    out += (out.empty() ? "" : " ") + std::string(kAxes[a].key) + "=" +
+           ValueText(static_cast<SweepAxis>(a), value[a]);
+  }
+  return out;
 }
 
 std::uint64_t Fnv1a64(std::string_view text) {
@@ -710,7 +723,8 @@ SweepPlan PlanSweep(const SweepGrid& grid, const SweepSettings& settings) {
     p.interface.preload_Nm = p.value[Index(SweepAxis::kPreload)];
     plant::PlantParams check = plan.variants[p.variant];
     check.interface = p.interface;
-    plant::ValidatePlantParams(check, "grid point " + std::to_string(i));
+    plant::ValidatePlantParams(check, "grid point " + std::to_string(i) + " (" +
+                                          PointAxes(plan.values, p.value) + ")");
     plan.points.push_back(p);
   }
   // The digest: the grid as parsed (defaults filled), the settings and the base sets.
@@ -797,6 +811,7 @@ void ClaimFolder(const fs::path& out, const std::string& digest, const json& rec
 }
 
 std::string Duration(double s) {
+  if (s < 10) return Fixed("%.1f s", s);
   if (s < 120) return Fixed("%.0f s", s);
   if (s < 7200) return Fixed("%.1f min", s / 60);
   return Fixed("%.1f h", s / 3600);
@@ -903,12 +918,8 @@ int RunSweep(const SweepPlan& plan, const SweepRunOptions& options) {
       spec.repetitions = plan.grid.repetitions;
       spec.robot = &plan.variants[p->variant];
       spec.record = &records.at(p->variant);
-      spec.label = "point " + std::to_string(p->index) + ":";
-      for (std::size_t a = 0; a < kSweepAxes; ++a) {
-        if (plan.values[a].size() < 2) continue;
-        spec.label += " " + std::string(kAxes[a].key) + "=" +
-                      ValueText(static_cast<SweepAxis>(a), p->value[a]);
-      }
+      spec.label =
+          "point " + std::to_string(p->index) + ": " + PointAxes(plan.values, p->value);
       specs.push_back(std::move(spec));
     }
     const auto trials_start = std::chrono::steady_clock::now();

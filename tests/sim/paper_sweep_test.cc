@@ -104,6 +104,22 @@ TEST(PaperSweepGrid, RefusesBadFilesNamingTheKeyAndRange) {
   EXPECT_EQ(Refusal("{" + axes + "}"), "accepted");
 }
 
+// A point whose plant the substep cannot integrate is refused by the plant's own check,
+// naming the point and its axes, before anything runs.
+TEST(PaperSweepGrid, RefusesAPointThePlantCannotRun) {
+  try {
+    (void)Plan(R"({"axes": {"stiffness_Nm_per_rad": [5, 900]}})");
+    ADD_FAILURE() << "a 900 N·m/rad attachment at 100 µs substeps accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(
+        std::string(e.what()).rfind("grid point 1 (stiffness_Nm_per_rad=900): field "
+                                    "'integration.max_step_s'",
+                                    0),
+        0u)
+        << e.what();
+  }
+}
+
 TEST(PaperSweepGrid, ShardIsIOverN) {
   std::string why;
   EXPECT_FALSE(ParseShard("3/2", &why));
