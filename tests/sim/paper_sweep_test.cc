@@ -135,6 +135,27 @@ TEST(PaperSweepGrid, RefusesAPointThePlantCannotRun) {
   }
 }
 
+TEST(PaperSweepGrid, RefusesMoreThanAHundredThousandPoints) {
+  std::string list = "[";
+  for (int i = 0; i < 40; ++i) list += (i ? ", " : "") + std::to_string(0.01 * (i + 1));
+  list += "]";
+  std::string degrees = "[";
+  for (int i = 1; i <= 30; ++i) degrees += (i > 1 ? ", " : "") + std::to_string(i);
+  degrees += "]";
+  const std::string grid = R"({"axes": {"stiffness_Nm_per_rad": )" + list +
+                           R"(, "damping_Nm_s_per_rad": )" + list +
+                           R"(, "preload_Nm": )" + list + R"(, "amplitude_deg": )" +
+                           degrees + R"(, "frequency_hz": [0.5, 1, 1.5, 2]}})";
+  try {
+    (void)Plan(grid.c_str());
+    ADD_FAILURE() << "a grid of 7,680,000 points accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "the grid has more than 100000 points (the product of its axes' lengths): "
+              "split it");
+  }
+}
+
 TEST(PaperSweepGrid, ShardIsIOverN) {
   std::string why;
   EXPECT_FALSE(ParseShard("3/2", &why));
