@@ -667,6 +667,14 @@ SweepPlan PlanSweep(const SweepGrid& grid, const SweepSettings& settings) {
   plan.config = app::DefaultJointConfig();
   if (settings.velocity_window != 0) {
     plan.config.velocity_window = static_cast<std::uint16_t>(settings.velocity_window);
+    // The board keeps its own window when it refuses one (even, out of range): every
+    // point would then run with another window than the grid's digest says.
+    sim::BusBoard board(plan.robot, plan.config);
+    if (board.app().control().config().velocity_window != plan.config.velocity_window) {
+      throw std::runtime_error("the board refused --velocity-window " +
+                               std::to_string(settings.velocity_window) +
+                               " (odd, 33 to 1001 ticks)");
+    }
   }
   // Absent axes take the base sets' values (the paper's 25° at 0.5 Hz for the trial).
   const plant::InterfaceParams& base = plan.subject.interface;

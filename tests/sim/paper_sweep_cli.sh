@@ -45,6 +45,8 @@ refused "unknown key 'sed'" --scenario sweep --grid "$dir/key.json" --out "$dir/
 refused "cannot be read" --scenario sweep --grid "$dir/none.json" --out "$dir/out"
 refused "needs --grid" --scenario sweep --out "$dir/out"
 refused "--grid is for --scenario sweep" --grid "$good" --out "$dir/out"
+refused "the board refused --velocity-window 40" \
+  --scenario sweep --grid "$good" --velocity-window 40 --out "$dir/out"
 refused "--subjects is set in the sweep's grid file" \
   --scenario sweep --grid "$good" --subjects subject2 --out "$dir/out"
 
