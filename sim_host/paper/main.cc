@@ -16,6 +16,7 @@
 #include "mjc/sim/robot_plant.h"
 #include "mjc/sim/scenarios.h"
 #include "paper_report.h"
+#include "sweep.h"
 
 namespace {
 
@@ -37,6 +38,10 @@ struct Options {
   double max_step_us = 100.0;
   int threads = 0;  // 0: one per core
   double frequency_hz = sim::kPaperFrequencyHz;
+  // --scenario sweep (sweep.h).
+  std::string grid;
+  std::string shard;
+  std::vector<std::string> merge;
 };
 
 plant::PlantParams Load(const std::string& name_or_path) {
@@ -56,7 +61,8 @@ int main(int argc, char** argv) {
       "(Figs. 10-12, Tables II-III). Board estimates are compared with plant ground "
       "truth."};
   cli.add_option("--scenario", opt.scenario, "Which experiment to run")
-      ->check(CLI::IsMember({"all", "calibration", "repeatability", "amplitude"}))
+      ->check(
+          CLI::IsMember({"all", "calibration", "repeatability", "amplitude", "sweep"}))
       ->capture_default_str();
   auto* robot_option =
       cli.add_option("--robot", opt.robot,
@@ -98,7 +104,47 @@ int main(int argc, char** argv) {
                  "Drive frequency of the trials, Hz (0.25 to 2; the paper's is 0.5). The "
                  "calibration sweep keeps its own 0.5 Hz")
       ->capture_default_str();
+  auto* grid_option = cli.add_option(
+      "--grid", opt.grid,
+      "With --scenario sweep: the grid file (JSON; sim_host/README.md, "
+      "\"Design-space sweep\"); its robot, subject and frequencies replace "
+      "--robot, --subjects and --frequency-hz");
+  auto* shard_option = cli.add_option(
+      "--shard", opt.shard,
+      "With --scenario sweep: i/n runs only the grid's points whose index % n == i");
+  auto* merge_option = cli.add_option(
+      "--merge", opt.merge,
+      "With --scenario sweep: joins these shards' --out folders into --out's summary");
   CLI11_PARSE(cli, argc, argv);
+  if (opt.scenario == "sweep") {
+    for (const auto* o :
+         {robot_option, cli.get_option("--robot-description"),
+          cli.get_option("--subjects"), cli.get_option("--frequency-hz")}) {
+      if (o->count() != 0) {
+        std::fprintf(stderr, "mjc-paper: %s is set in the sweep's grid file, not here\n",
+                     o->get_name().c_str());
+        return 2;
+      }
+    }
+    if (cli.get_option("--out")->count() == 0) opt.out = "out/sweep";
+    paper::SweepCommand sweep{.grid_path = opt.grid,
+                              .merge = opt.merge,
+                              .out = opt.out,
+                              .shard = opt.shard,
+                              .threads = opt.threads,
+                              .quiet = opt.quiet,
+                              .settings = {.noise = opt.noise,
+                                           .max_step_us = opt.max_step_us,
+                                           .velocity_window = opt.velocity_window}};
+    return paper::SweepMain(sweep);
+  }
+  for (const auto* o : {grid_option, shard_option, merge_option}) {
+    if (o->count() != 0) {
+      std::fprintf(stderr, "mjc-paper: %s is for --scenario sweep\n",
+                   o->get_name().c_str());
+      return 2;
+    }
+  }
   // Checked here rather than by CLI11, for one line naming the range; NaN fails too.
   if (!(opt.frequency_hz >= sim::kMinDriveFrequencyHz &&
         opt.frequency_hz <= sim::kMaxDriveFrequencyHz)) {

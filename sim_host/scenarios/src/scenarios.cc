@@ -364,11 +364,12 @@ RepeatabilityOutcome RunRepeatability(BusBoard& board, const plant::PlantParams&
   return SummariseRepeatability(std::move(trials));
 }
 
-AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& t) {
+AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& t,
+                              std::uint16_t repetitions) {
   AmplitudePoint pt;
   pt.amplitude_deg = amplitude_deg;
   std::vector<double> l, u, n, e, tl, tu, tn, te, k, b;
-  for (const WindowOutcome* w : host::AnalysedFlexions(t.windows, 5)) {
+  for (const WindowOutcome* w : host::AnalysedFlexions(t.windows, repetitions)) {
     l.push_back(w->load);
     u.push_back(w->unload);
     n.push_back(w->net);
@@ -502,7 +503,8 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
                                     const Calibration& record,
                                     const std::vector<TrialSpec>& specs, int threads,
                                     const ProgressFn& progress,
-                                    const host::RobotDescription* joint) {
+                                    const host::RobotDescription* joint,
+                                    const TrialFinishedFn& finished) {
   std::vector<TrialOutcome> out(specs.size());
   std::vector<std::exception_ptr> errors(specs.size());
   std::atomic<std::size_t> next{0};
@@ -512,13 +514,13 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
     for (std::size_t i = next++; i < specs.size(); i = next++) {
       const TrialSpec& spec = specs[i];
       try {
-        plant::PlantParams params = robot;
+        plant::PlantParams params = spec.robot ? *spec.robot : robot;
         params.interface = spec.interface;
         params.sensors.noise_seed = spec.noise_seed;
         // A board powered up at rest, given the record the sweep made as `mjc cal
         // upload` gives it.
         BusBoard board(params, config);
-        Upload(board, record);
+        Upload(board, spec.record ? *spec.record : record);
         if (joint) {
           const host::ParamWriteOutcome limits =
               host::SendJointLimits(board.client(), *joint, 500);
@@ -527,16 +529,26 @@ std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
                                      "'s limits: " + limits.why);
           }
         }
-        out[i] = RunTrial(board, PaperSine(spec.amplitude_deg, 5, spec.frequency_hz),
-                          spec.keep_trace);
+        out[i] = RunTrial(
+            board, PaperSine(spec.amplitude_deg, spec.repetitions, spec.frequency_hz),
+            spec.keep_trace);
       } catch (...) {
         errors[i] = std::current_exception();
       }
-      if (progress) {
+      if (progress || finished) {
         const std::lock_guard<std::mutex> lock(progress_mutex);
         ++done;
-        progress(spec.label,
-                 static_cast<double>(done) / static_cast<double>(specs.size()));
+        if (finished && !errors[i]) {
+          try {
+            finished(i, out[i]);
+          } catch (...) {
+            errors[i] = std::current_exception();
+          }
+        }
+        if (progress) {
+          progress(spec.label,
+                   static_cast<double>(done) / static_cast<double>(specs.size()));
+        }
       }
     }
   };

@@ -222,7 +222,9 @@ SubjectSweep RunAmplitudeSweep(BusBoard& board, const plant::PlantParams& subjec
 
 // The statistics of the two functions above, from trials already run.
 RepeatabilityOutcome SummariseRepeatability(std::vector<TrialOutcome> trials);
-AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& trial);
+// `repetitions`: the trial's cycles, of which the middle three are analysed.
+AmplitudePoint SummarisePoint(double amplitude_deg, const TrialOutcome& trial,
+                              std::uint16_t repetitions = 5);
 SubjectSweep SummariseSweep(const std::string& subject,
                             std::vector<AmplitudePoint> points);
 
@@ -285,6 +287,12 @@ struct TrialSpec {
   std::uint64_t noise_seed = 1;
   std::string label;  // for progress lines
   double frequency_hz = kPaperFrequencyHz;
+  // Cycles of the trial (PaperSine's repetitions).
+  std::uint16_t repetitions = 5;
+  // A plant and calibration record of the spec's own instead of RunTrials' `robot` and
+  // `record` (a robot variant calibrated for itself); they must outlive RunTrials.
+  const plant::PlantParams* robot = nullptr;
+  const Calibration* record = nullptr;
 };
 
 // Runs every spec on `threads` threads (0: one per core; 1: in the calling thread).
@@ -294,11 +302,16 @@ struct TrialSpec {
 // exception, if any, after all have run. With a `joint` description, each board is
 // sent its limits after the record (host::SendJointLimits, as `mjc trial --robot`
 // sends them before anything moves); a board refusing them fails that spec.
+// `finished`, when given, is called with each spec's index and outcome as it ends
+// (before `progress`, serialised with it), so a caller can keep what ended even when a
+// later spec fails or the process dies.
+using TrialFinishedFn = std::function<void(std::size_t index, const TrialOutcome&)>;
 std::vector<TrialOutcome> RunTrials(const plant::PlantParams& robot,
                                     const ControlConfig& config,
                                     const Calibration& record,
                                     const std::vector<TrialSpec>& specs, int threads,
                                     const ProgressFn& progress,
-                                    const host::RobotDescription* joint = nullptr);
+                                    const host::RobotDescription* joint = nullptr,
+                                    const TrialFinishedFn& finished = nullptr);
 
 }  // namespace mjc::sim
