@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <numbers>
@@ -360,6 +361,29 @@ struct Row {
 
 std::string Cell(double v, const char* format = "%.3g") { return Fixed(format, v); }
 
+// A ratio to a point's loading work (η, the power error as % of its peak) means
+// something only when that work stands above the noise: twice the standard error of
+// the board's loading means, and the table's resolution, 1 µJ (a work printed as
+// 0.000 mJ: a cable slack wider than the motion moves the joint not at all). Otherwise
+// the cell says why there is no figure.
+// sweep.csv has nan there.
+constexpr double kWorkResolution_J = 1e-6;
+double RatioFloor(const host::Stats& board_load) {
+  return std::max(2 * board_load.se, kWorkResolution_J);
+}
+double Judged(double v, double load_J, const host::Stats& board_load) {
+  return load_J > RatioFloor(board_load) ? v : std::numeric_limits<double>::quiet_NaN();
+}
+std::string RatioCell(double v, double load_J, const host::Stats& board_load,
+                      const char* format) {
+  const double floor = RatioFloor(board_load);
+  if (!(load_J > floor)) {
+    return "n/a (loading " + Fixed("%.4f", 1e3 * load_J) + " mJ, within " +
+           Fixed("%.4f", 1e3 * floor) + " mJ)";
+  }
+  return std::isfinite(v) ? Fixed(format, v) : std::string("n/a");
+}
+
 // The summary's table also goes to stdout, as the other scenarios print theirs.
 void WriteSummary(const fs::path& out, const Resolved& grid) {
   std::vector<Row> rows;
@@ -400,9 +424,11 @@ void WriteSummary(const fs::path& out, const Resolved& grid) {
     const sim::AmplitudePoint& p = r.point;
     csv += "," + std::to_string(p.eta.n);
     for (const double v :
-         {p.eta.mean, p.truth_eta.mean, 1e3 * p.load.mean, 1e3 * p.truth_load.mean,
-          1e3 * p.unload.mean, 1e3 * p.truth_unload.mean, 1e3 * p.net.mean,
-          1e3 * p.truth_net.mean, p.power_rmse_pct_peak}) {
+         {Judged(p.eta.mean, p.load.mean, p.load),
+          Judged(p.truth_eta.mean, p.truth_load.mean, p.load), 1e3 * p.load.mean,
+          1e3 * p.truth_load.mean, 1e3 * p.unload.mean, 1e3 * p.truth_unload.mean,
+          1e3 * p.net.mean, 1e3 * p.truth_net.mean,
+          Judged(p.power_rmse_pct_peak, p.truth_load.mean, p.load)}) {
       csv += "," + host::CsvTable::Number(v);
     }
     csv += "," + std::to_string(p.stiffness.n);
@@ -453,11 +479,11 @@ void WriteSummary(const fs::path& out, const Resolved& grid) {
       md += "\n";
       continue;
     }
-    md += " " + Cell(p.eta.mean, "%.1f") + " | " + Cell(p.truth_eta.mean, "%.1f") +
-          " | " + Cell(1e3 * p.net.mean, "%.3f") + " | " +
-          Cell(1e3 * p.truth_net.mean, "%.3f") + " | " +
-          Cell(p.power_rmse_pct_peak, "%.1f") + " | " +
-          (p.stiffness.n ? Cell(p.stiffness.mean) : std::string("–")) + " | " +
+    md += " " + RatioCell(p.eta.mean, p.load.mean, p.load, "%.1f") + " | " +
+          RatioCell(p.truth_eta.mean, p.truth_load.mean, p.load, "%.1f") + " | " +
+          Cell(1e3 * p.net.mean, "%.3f") + " | " + Cell(1e3 * p.truth_net.mean, "%.3f") +
+          " | " + RatioCell(p.power_rmse_pct_peak, p.truth_load.mean, p.load, "%.1f") +
+          " | " + (p.stiffness.n ? Cell(p.stiffness.mean) : std::string("–")) + " | " +
           Cell(r.result.truth.stiffness) + " | " +
           (p.damping.n ? Cell(p.damping.mean) : std::string("–")) + " | " +
           Cell(r.result.truth.damping) + " |\n";
