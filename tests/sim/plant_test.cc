@@ -883,6 +883,34 @@ TEST(PlantPaperFidelity, ElasticInterfaceReadsNoLoss) {
   }
 }
 
+// The standard linear solid's limit b → 0: a dashpot that resists nothing lets its arm
+// follow the joint, so the arm carries no force and the attachment is k alone — the
+// Kelvin–Voigt plant of the same k and b = 0 is the reference, step for step.
+TEST(PlantPaperFidelity, AStandardLinearSolidWithoutDampingIsItsParallelSpring) {
+  PlantParams sls = Quiet("subject1");
+  sls.interface.model = InterfaceModel::kStandardLinearSolid;
+  sls.interface.stiffness_Nm_per_rad = 2.0;
+  sls.interface.maxwell_stiffness_Nm_per_rad = 4.0;
+  sls.interface.damping_Nm_s_per_rad = 0.0;
+  PlantParams kv = sls;
+  kv.interface.model = InterfaceModel::kKelvinVoigt;
+  Plant a(sls), b(kv);
+  double worst = 0, peak = 0;
+  for (int n = 1; n <= 20000; ++n) {
+    const double motor = 20.0 * kDeg * std::sin(std::numbers::pi * n * kTick_s);
+    a.StepPrescribedMotor(motor, kTick_s);
+    b.StepPrescribedMotor(motor, kTick_s);
+    worst = std::max(
+        worst, std::abs(a.truth().interface_torque_Nm - b.truth().interface_torque_Nm));
+    peak = std::max(peak, std::abs(b.truth().interface_torque_Nm));
+  }
+  ASSERT_GT(peak, 0.05);
+  EXPECT_LT(worst, 1e-9 * peak);
+  EXPECT_NEAR(a.truth().interface_energy_J, b.truth().interface_energy_J,
+              1e-9 * std::abs(b.truth().interface_energy_J));
+  ExpectBalanced(a.truth(), "free arm");
+}
+
 TEST(PlantPaperFidelity, StandardLinearSolidDissipates) {
   PlantParams p = Quiet("subject1");
   p.interface.model = InterfaceModel::kStandardLinearSolid;

@@ -193,14 +193,15 @@ Plant::SubstepConstants Plant::MakeConstants(double h) const {
   k.sea_slope = k_sea_ * k.half_h;
   if (ip.present && ip.model == InterfaceModel::kKelvinVoigt) {
     k.interface_slope = ip.stiffness_Nm_per_rad * k.half_h + ip.damping_Nm_s_per_rad;
-  } else if (ip.present) {
-    if (ip.damping_Nm_s_per_rad > 0.0) {
-      k.maxwell_beta =
-          k.half_h * ip.maxwell_stiffness_Nm_per_rad / ip.damping_Nm_s_per_rad;
-    }
+  } else if (ip.present && ip.damping_Nm_s_per_rad > 0.0) {
+    k.maxwell_beta = k.half_h * ip.maxwell_stiffness_Nm_per_rad / ip.damping_Nm_s_per_rad;
     k.interface_slope =
         k.half_h * (ip.stiffness_Nm_per_rad +
                     ip.maxwell_stiffness_Nm_per_rad / (1.0 + k.maxwell_beta));
+  } else if (ip.present) {
+    // The limit b → 0 of the line above: the arm's term vanishes.
+    k.maxwell_free = true;
+    k.interface_slope = k.half_h * ip.stiffness_Nm_per_rad;
   }
   k.joint_diagonal =
       k.joint_mass + k.sea_slope + k.interface_slope + params_.joint.viscous_Nm_s_per_rad;
@@ -216,7 +217,8 @@ double Plant::InterfacePotential(const State& x) const {
   if (!ip.present) return 0.0;
   const double q = x(Index::kJointAngle);
   double u = 0.5 * ip.stiffness_Nm_per_rad * q * q + ip.preload_Nm * q;
-  if (ip.model == InterfaceModel::kStandardLinearSolid) {
+  // A free arm (b = 0: Coefficients::maxwell_free) stores nothing.
+  if (ip.model == InterfaceModel::kStandardLinearSolid && ip.damping_Nm_s_per_rad > 0.0) {
     const double d = q - x(Index::kMaxwell);
     u += 0.5 * ip.maxwell_stiffness_Nm_per_rad * d * d;
   }
@@ -290,9 +292,11 @@ bool Plant::Substep(const Drive& drive, const SubstepConstants& k, const State& 
   if (kelvin_voigt) {
     interface0 = ip.stiffness_Nm_per_rad * joint0 + ip.preload_Nm;
   } else if (sls) {
-    interface0 =
-        ip.stiffness_Nm_per_rad * joint0 + ip.preload_Nm +
-        ip.maxwell_stiffness_Nm_per_rad * (joint0 - maxwell0) / (1.0 + k.maxwell_beta);
+    interface0 = ip.stiffness_Nm_per_rad * joint0 + ip.preload_Nm;
+    if (!k.maxwell_free) {
+      interface0 +=
+          ip.maxwell_stiffness_Nm_per_rad * (joint0 - maxwell0) / (1.0 + k.maxwell_beta);
+    }
   }
   const double joint_rest = -k.joint_mass * joint_rate0 - k_sea_ * stretch0 + interface0;
   // The cable side's equation without contacts and bristle: cable_diagonal·ω̄_c +
@@ -409,7 +413,9 @@ bool Plant::Substep(const Drive& drive, const SubstepConstants& k, const State& 
   if (kelvin_voigt) {
     interface_loss_J = h * ip.damping_Nm_s_per_rad * wj * wj;
   } else if (sls) {
-    maxwell_mid = (maxwell0 + k.maxwell_beta * joint_mid) / (1.0 + k.maxwell_beta);
+    maxwell_mid = k.maxwell_free
+                      ? joint_mid
+                      : (maxwell0 + k.maxwell_beta * joint_mid) / (1.0 + k.maxwell_beta);
     // The arm's force times the dashpot's travel.
     interface_loss_J = ip.maxwell_stiffness_Nm_per_rad * (joint_mid - maxwell_mid) * 2.0 *
                        (maxwell_mid - maxwell0);
@@ -605,7 +611,7 @@ double Plant::InterfaceTorque(const State& x) const {
   double torque = ip.stiffness_Nm_per_rad * joint + ip.preload_Nm;
   if (ip.model == InterfaceModel::kKelvinVoigt) {
     torque += ip.damping_Nm_s_per_rad * x(Index::kJointVelocity);
-  } else {
+  } else if (ip.damping_Nm_s_per_rad > 0.0) {  // a free arm (b = 0) pulls nothing
     torque += ip.maxwell_stiffness_Nm_per_rad * (joint - x(Index::kMaxwell));
   }
   return torque;

@@ -282,12 +282,15 @@ class Plant {
     double contact_slope = 0;      // k_c·h/2
     double sea_slope = 0;          // K·h/2: the SEA torque per rad/s of midpoint speed
     double maxwell_beta = 0;       // SLS: h·k_2/(2b), x̄ = (x_0 + β·θ̄_j)/(1 + β)
-    double interface_slope = 0;    // dτ_if/dω̄_j
-    double joint_diagonal = 0;     // d(joint equation)/dω̄_j
-    double joint_gain = 0;         // K·h/2 / joint_diagonal: dω̄_j/dω̄_c
-    double joint_compliance = 0;   // 1 / joint_diagonal
-    double cable_diagonal = 0;     // d(cable equation)/dω̄_c with the joint eliminated,
-                                   // viscous sheath friction included
+    // SLS with b = 0 (β infinite): a dashpot that resists nothing lets its arm follow
+    // the joint, so the arm carries no force and the attachment is k alone.
+    bool maxwell_free = false;
+    double interface_slope = 0;   // dτ_if/dω̄_j
+    double joint_diagonal = 0;    // d(joint equation)/dω̄_j
+    double joint_gain = 0;        // K·h/2 / joint_diagonal: dω̄_j/dω̄_c
+    double joint_compliance = 0;  // 1 / joint_diagonal
+    double cable_diagonal = 0;    // d(cable equation)/dω̄_c with the joint eliminated,
+                                  // viscous sheath friction included
   };
 
   // The midpoint speeds ω̄_m, ω̄_c of the last substep: Newton's starting point for the
