@@ -82,3 +82,24 @@ case $row15 in
   *"n/a"*) echo "the 15° row lost its figures: $row15"; exit 1 ;;
   *) echo "15°: $row15" ;;
 esac
+
+# scripts/family-figures (./bench's worst-of-family figures) on the same sweep: the
+# still 2° point is left out of the ratios and counted, the 15° point gives each figure.
+figures=$(python3 "$(dirname "$0")/../../scripts/family-figures" "$dir/slack") ||
+  { echo "family-figures failed on the slack sweep"; exit 1; }
+echo "$figures"
+power=$(printf '%s\n' "$figures" | grep '^power_rmse_pct_peak_family: ')
+case $power in
+  *"(worst of 2 points, 0 faulted, 1 without loading work: "*"amplitude_deg 15,"*) ;;
+  *) echo "family-figures' power line: $power"; exit 1 ;;
+esac
+expected=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "power_rmse_pct_peak") c = i }
+  NR == 3 { printf "%.3g", $c }' "$dir/slack/sweep.csv")
+case $power in
+  "power_rmse_pct_peak_family: $expected %"*) ;;
+  *) echo "family-figures gave $power, sweep.csv's 15° row $expected"; exit 1 ;;
+esac
+if python3 "$(dirname "$0")/../../scripts/family-figures" "$dir/none" 2>/dev/null; then
+  echo "family-figures accepted a folder without a sweep"
+  exit 1
+fi
