@@ -248,4 +248,46 @@ HandCheck CheckHand(const Hand& hand, const BusScan& scan) {
   return check;
 }
 
+std::vector<std::string> DescribeHandCheck(const Hand& hand, const HandCheck& check,
+                                           const BusScan& scan) {
+  std::vector<std::string> lines;
+  char text[200];
+  int present = 0;
+  for (const HandCheck::Joint& j : check.joints) {
+    const char* state = !j.present        ? "missing"
+                        : j.ambiguous     ? "present, but two boards answer on its id"
+                        : j.in_bootloader ? "present, in its bootloader"
+                                          : "present";
+    present += j.present ? 1 : 0;
+    std::snprintf(text, sizeof text, "%-16s node %d  %s", j.joint->name.c_str(),
+                  j.joint->node, state);
+    lines.emplace_back(text);
+  }
+  for (const int node : check.extra) {
+    lines.push_back("node " + std::to_string(node) + ": extra, not a joint of " +
+                    hand.name);
+  }
+  for (const int node : check.wrong_build) {
+    const auto& info = scan.nodes().at(node).identity.info();
+    std::snprintf(text, sizeof text, "node %d: wrong build %08x, most boards run %08x",
+                  node, info->build, *check.build);
+    lines.emplace_back(text);
+  }
+  std::string verdict = hand.name + ": ";
+  if (check.Complete()) {
+    verdict += "complete, " + std::to_string(present) + " of " +
+               std::to_string(check.joints.size()) + " joints";
+  } else {
+    std::string missing;
+    for (const std::string& name : check.Missing()) {
+      missing += (missing.empty() ? "" : ", ") + name;
+    }
+    verdict += "incomplete, " + std::to_string(present) + " of " +
+               std::to_string(check.joints.size()) + " joints" +
+               (missing.empty() ? "" : ": missing " + missing);
+  }
+  lines.push_back(verdict);
+  return lines;
+}
+
 }  // namespace mjc::host

@@ -95,4 +95,13 @@ struct HandCheck {
 // id and boards in their bootloader (another image) are not judged.
 HandCheck CheckHand(const Hand& hand, const BusScan& scan);
 
+// mjc list --hand's lines for people: one per joint ("index_mcp  node 4  present",
+// "missing", "present, in its bootloader", "two boards"), then one per extra board
+// ("node 6: extra, not a joint of maestro-right") and per wrong build ("node 3: wrong
+// build 1958ba84, most boards run 77aa0c12"), and the verdict ("maestro-right: complete,
+// 8 of 8 joints" or "maestro-right: incomplete, 6 of 8 joints: missing thumb_ip,
+// index_mcp").
+std::vector<std::string> DescribeHandCheck(const Hand& hand, const HandCheck& check,
+                                           const BusScan& scan);
+
 }  // namespace mjc::host
