@@ -5,6 +5,9 @@
 // named under the table), and two boards answering with one node id. It listens until
 // each node heard has shown every board behind its id (host::BusScan: a BoardInfo period
 // and a tenth of the boards' own time), or the bus has been silent for --silence-ms.
+// With --hand FILE it then checks the bus against the hand (host::CheckHand): each joint
+// present or missing, boards the hand does not have, builds other than most boards';
+// a joint missing exits 3 (hands/README.md).
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
