@@ -109,12 +109,19 @@ void AddCalibrate(CLI::App& app) {
   auto* robot_option = cmd->add_option(
       "--robot", robot_path,
       "Robot description of the joint (robots/*.json): the fit takes its α = r_m/r_j, "
-      "the record its SEA stiffness K = 2kr_j², cable friction and joint zero");
+      "the record its SEA stiffness K = 2kr_j², cable friction and joint zero (with "
+      "--joint: the joint's, from the hand file; another file is refused)");
+  JointSuppliesRobot(cmd, robot_option, &robot_path);
+  // Checked in the callback, not with CLI11's needs(): --joint supplies --robot too.
   cmd->add_flag("--fit-alpha", fit_alpha,
                 "Fit α too, within ±20 % of the description's (a fit on a bound is "
-                "refused)")
-      ->needs(robot_option);
+                "refused; needs --robot or --joint)");
   cmd->callback([] {
+    if (fit_alpha && robot_path.empty()) {
+      throw Failure(Exit::kUsage,
+                    "--fit-alpha needs the joint's description: give "
+                    "--robot FILE or --joint NAME");
+    }
     // The joint's description first: a bad file moves nothing and writes nothing.
     std::optional<host::RobotDescription> robot;
     nlohmann::json robot_record;  // its content for run.json, as read

@@ -14,7 +14,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -25,6 +28,7 @@
 #include "mjc/host/can_link.h"
 #include "mjc/host/config.h"
 #include "mjc/host/emergency_stop.h"
+#include "mjc/host/hand.h"
 #include "mjc/host/report.h"
 #include "mjc/host/run_record.h"
 #include "mjc/protocol/can_frame.h"
@@ -68,7 +72,10 @@ inline constexpr const char* kExitStatusHelp =
     "a board was not updated (named; it waits "
     "in its bootloader: run mjc flash again).\n"
     "Defaults: --iface from MJC_IFACE, else the config file's \"iface\", else vcan0; "
-    "--node from its \"node\", else 1; GPIO lines (CHIP:LINE) from its \"estop_line\", "
+    "--node from its \"node\", else 1; --joint NAME is looked up in --hand FILE, else "
+    "in its \"hand\" (hands/README.md; the hand's \"iface\" then wins over "
+    "MJC_IFACE and the config's); GPIO lines "
+    "(CHIP:LINE) from its \"estop_line\", "
     "\"estop_active\", \"sync_line\" and \"reset_lines\". The config file is "
     "$MJC_CONFIG, else ~/.config/mjc/config.json (JSON: {\"iface\": \"can0\", "
     "\"node\": 2}; an unknown key is an error). The command line wins.\n"
@@ -101,10 +108,49 @@ host::ToolConfig& Defaults();
 bool LoadDefaults(int argc, char** argv, std::string* why);
 
 // --iface, defaulting to MJC_IFACE, the config file's, or vcan0.
+// --- Hands: --hand FILE and --joint NAME (hands/README.md) ---------------------------
+
+// What a command's --node, --hand, --joint (and, where it has them, --iface and --robot)
+// were bound to, for ResolveJoints after parsing. One per subcommand, kept by
+// TargetsOf.
+struct NodeTargets {
+  CLI::Option* node_option = nullptr;
+  CLI::Option* hand_option = nullptr;
+  CLI::Option* iface_option = nullptr;
+  std::string* iface = nullptr;
+  CLI::Option* robot_option = nullptr;
+  std::string* robot = nullptr;
+  bool several = false;  // the command takes several nodes
+  std::string hand_path;
+  std::vector<std::string> joints;
+  // The node ids chosen, into the command's --node variable.
+  std::function<void(const std::vector<int>&)> set_nodes;
+  // After parsing: the hand given (or the config file's, when --joint named a joint)
+  // and the joints chosen from it, in its order.
+  std::optional<host::Hand> hand;
+  std::vector<host::HandJoint> chosen;
+};
+inline NodeTargets& TargetsOf(const CLI::App* cmd) {
+  static std::map<const CLI::App*, NodeTargets> targets;  // nodes stay where they are
+  return targets[cmd];
+}
+
+// Resolves --hand and --joint into the command's node ids (and --iface, --robot),
+// after parsing and before the command runs. Throws Failure: kUsage for --node with
+// --joint or --hand, an unknown joint (the hand's joints listed), --hand alone where
+// one node is taken, --joint without a hand, --robot naming another file than the
+// joint's description; kFailure for a hand file that is refused.
+void ResolveJoints(NodeTargets& t);
+
+// --iface, defaulting to MJC_IFACE, the config file's, or vcan0 (with --hand, the hand
+// file's "iface" unless --iface is given).
 inline CLI::Option* AddIfaceOption(CLI::App* cmd, std::string* iface,
                                    const char* help = "CAN interface") {
   *iface = Defaults().iface.value_or("vcan0");
-  return cmd->add_option("--iface", *iface, help)->capture_default_str();
+  NodeTargets& t = TargetsOf(cmd);
+  t.iface = iface;
+  t.iface_option = cmd->add_option("--iface", *iface, help)->capture_default_str();
+  return t.iface_option;
 }
 
 // A number within [lo, hi] (inclusive), for options and each value of a vector option:
@@ -134,17 +180,56 @@ inline CLI::Validator InRange(double lo, double hi, const std::string& unit = ""
 
 // --node into an int (one node) or a std::vector<int> (several), checked against the
 // protocol's node range; its default the config file's node, else 1.
+// With `by_joint` (every mjc command that talks to boards), also --hand FILE and
+// --joint NAME (repeatable where T is a vector; --hand alone then means every joint of
+// the hand), resolved into *node once the command line is parsed (ResolveJoints).
 template <class T>
-CLI::Option* AddNodeOption(CLI::App* cmd, T* node, const char* help = "Node id") {
+CLI::Option* AddNodeOption(CLI::App* cmd, T* node, const char* help = "Node id",
+                           bool by_joint = true) {
   const int fallback = Defaults().node.value_or(1);
-  if constexpr (std::is_same_v<T, int>) {
+  constexpr bool kOne = std::is_same_v<T, int>;
+  if constexpr (kOne) {
     *node = fallback;
   } else {
     *node = {fallback};
   }
-  return cmd->add_option("--node", *node, help)
-      ->check(InRange(protocol::kMinNode, protocol::kMaxNode))
-      ->capture_default_str();
+  CLI::Option* option = cmd->add_option("--node", *node, help)
+                            ->check(InRange(protocol::kMinNode, protocol::kMaxNode))
+                            ->capture_default_str();
+  if (!by_joint) return option;
+  NodeTargets& t = TargetsOf(cmd);
+  t.node_option = option;
+  t.several = !kOne;
+  t.set_nodes = [node](const std::vector<int>& nodes) {
+    if constexpr (kOne) {
+      *node = nodes.front();
+    } else {
+      *node = nodes;
+    }
+  };
+  t.hand_option =
+      cmd->add_option("--hand", t.hand_path,
+                      std::string("Hand file (hands/*.json): --joint names its joints") +
+                          (kOne ? "" : "; alone, every joint of the hand") +
+                          "; its \"iface\" is the default --iface");
+  cmd->add_option("--joint", t.joints,
+                  std::string(kOne ? "The joint to talk to, by its name in --hand (or "
+                                     "the config file's \"hand\"), instead of --node"
+                                   : "A joint to talk to, by its name in --hand (or the "
+                                     "config file's \"hand\"), instead of --node; "
+                                     "repeat for several"))
+      ->type_name("NAME");
+  cmd->parse_complete_callback([cmd] { ResolveJoints(TargetsOf(cmd)); });
+  return option;
+}
+
+// A command's --robot (a robot description's path), which --joint fills in with the
+// joint's description; a --robot given with --joint must name the same file.
+inline void JointSuppliesRobot(CLI::App* cmd, CLI::Option* robot_option,
+                               std::string* robot) {
+  NodeTargets& t = TargetsOf(cmd);
+  t.robot_option = robot_option;
+  t.robot = robot;
 }
 
 // --frequency-hz of a trial or sweep, within what the board accepts (kMinFrequencyHz,
@@ -358,7 +443,10 @@ inline void IdentifyOrThrow(host::BoardClient& board, std::chrono::milliseconds 
 // mjc list's scan and table (or JSON lines) of every board on `iface`; mjc flash --info
 // shows the same. Throws Failure: nothing heard (kNoAnswer), two boards behind one id
 // (kAmbiguous, after the table), the link, a signal.
-void ListBoards(const std::string& iface, int silence_ms, bool json);
+// With `hand`, then each joint present or missing, the boards the hand does not have and
+// those of another build (host::CheckHand); a joint missing is a Failure (kNoAnswer).
+void ListBoards(const std::string& iface, int silence_ms, bool json,
+                const host::Hand* hand = nullptr);
 
 // --- GPIO lines (README: GPIO lines) ---------------------------------------------
 

@@ -101,7 +101,8 @@ int main(int argc, char** argv) {
   double seconds = 0, speed = 1;
   mjc::cli::AddIfaceOption(&app, &iface);
   mjc::cli::AddNodeOption(
-      &app, &node, "Node id, when the flash holds no identity record (a record's wins)");
+      &app, &node, "Node id, when the flash holds no identity record (a record's wins)",
+      false);
   app.add_option("--robot", robot, "Plant parameter set of the robot (name or .json)")
       ->capture_default_str();
   app.add_option("--subject", subject,

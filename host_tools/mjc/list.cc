@@ -5,6 +5,9 @@
 // named under the table), and two boards answering with one node id. It listens until
 // each node heard has shown every board behind its id (host::BusScan: a BoardInfo period
 // and a tenth of the boards' own time), or the bus has been silent for --silence-ms.
+// With --hand FILE it then checks the bus against the hand (host::CheckHand): each joint
+// present or missing, boards the hand does not have, builds other than most boards';
+// a joint missing exits 3 (hands/README.md).
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -14,6 +17,7 @@
 #include "mjc/build_id.h"
 #include "mjc/host/bus_scan.h"
 #include "mjc/host/describe.h"
+#include "mjc/host/hand.h"
 
 namespace mjc::cli {
 namespace {
@@ -111,16 +115,80 @@ void AddList(CLI::App& app) {
   static std::string iface;
   static int silence_ms = 3000;
   static bool json = false;
+  static std::string hand_path;
   AddIfaceOption(cmd, &iface);
   cmd->add_option("--silence-ms", silence_ms,
                   "Give up after this long without a single frame (an empty bus)")
       ->check(InRange(100, 60000, "ms"))
       ->capture_default_str();
   cmd->add_flag("--json", json, "One JSON object per node and line");
-  cmd->callback([] { ListBoards(iface, silence_ms, json); });
+  cmd->add_option("--hand", hand_path,
+                  "Check the bus against this hand file (hands/*.json): each joint "
+                  "present or missing, boards not in the hand, builds that differ; "
+                  "exit 3 when a joint is missing. Its \"iface\" is the default --iface");
+  cmd->callback([cmd] {
+    if (hand_path.empty()) return ListBoards(iface, silence_ms, json);
+    std::string why;
+    const auto hand = host::LoadHand(hand_path, &why);
+    if (!hand) throw Failure("hand refused: " + why);
+    const NodeTargets& t = TargetsOf(cmd);
+    const bool iface_given = t.iface_option != nullptr && t.iface_option->count() > 0;
+    ListBoards(hand->iface && !iface_given ? *hand->iface : iface, silence_ms, json,
+               &*hand);
+  });
 }
 
-void ListBoards(const std::string& iface, int silence_ms, bool json) {
+namespace {
+
+// The hand's part of mjc list: its lines (or one JSON object), then a Failure when a
+// joint is missing.
+void ReportHand(const host::Hand& hand, const host::BusScan& scan, bool json) {
+  const host::HandCheck check = host::CheckHand(hand, scan);
+  if (json) {
+    nlohmann::json joints = nlohmann::json::array();
+    for (const auto& j : check.joints) {
+      joints.push_back({{"joint", j.joint->name},
+                        {"node", j.joint->node},
+                        {"present", j.present},
+                        {"ambiguous", j.ambiguous},
+                        {"in_bootloader", j.in_bootloader}});
+    }
+    nlohmann::json wrong = nlohmann::json::array();
+    for (const int node : check.wrong_build) wrong.push_back(node);
+    std::printf(
+        "%s\n",
+        nlohmann::json{
+            {"hand", hand.name},
+            {"file", hand.source},
+            {"complete", check.Complete()},
+            {"joints", joints},
+            {"extra", check.extra},
+            {"wrong_build", wrong},
+            {"build", check.build ? nlohmann::json(host::BuildName(*check.build, false))
+                                  : nlohmann::json(nullptr)}}
+            .dump()
+            .c_str());
+  } else {
+    std::printf("hand %s (%s):\n", hand.name.c_str(), hand.source.c_str());
+    for (const std::string& line : host::DescribeHandCheck(hand, check, scan)) {
+      std::printf("  %s\n", line.c_str());
+    }
+  }
+  const auto missing = check.Missing();
+  if (missing.empty()) return;
+  std::string names;
+  for (const std::string& name : missing) {
+    names += (names.empty() ? "" : ", ") + name + " (node " +
+             std::to_string(hand.Find(name)->node) + ")";
+  }
+  throw Failure(Exit::kNoAnswer,
+                hand.name + " is incomplete: no board answers for " + names);
+}
+
+}  // namespace
+
+void ListBoards(const std::string& iface, int silence_ms, bool json,
+                const host::Hand* hand) {
   auto link = OpenLink(iface);
   const std::atomic<bool>& stop = StopOnSignals();
   host::BusScan scan;
@@ -130,6 +198,12 @@ void ListBoards(const std::string& iface, int silence_ms, bool json) {
   if (end == host::ScanEnd::kLinkFailed) throw Failure(why);
   if (end == host::ScanEnd::kInterrupted) throw Failure(Exit::kStopped, "interrupted");
   if (scan.nodes().empty()) {
+    if (hand != nullptr) {
+      try {
+        ReportHand(*hand, scan, json);
+      } catch (const Failure&) {  // every joint missing: said as an empty bus below
+      }
+    }
     throw Failure(Exit::kNoAnswer,
                   "no board on " + iface + " (nothing heard for " +
                       std::to_string(silence_ms) +
@@ -205,7 +279,16 @@ void ListBoards(const std::string& iface, int silence_ms, bool json) {
     std::printf("this mjc: %s\n", host::BuildName(build::kCommit, build::kDirty).c_str());
     std::fputs(unreadable.c_str(), stdout);
   }
-  if (!ambiguous.empty()) throw Failure(Exit::kAmbiguous, ambiguous);
+  if (!ambiguous.empty()) {
+    if (hand != nullptr) {
+      try {
+        ReportHand(*hand, scan, json);
+      } catch (const Failure&) {  // two boards on one id come first (exit 7)
+      }
+    }
+    throw Failure(Exit::kAmbiguous, ambiguous);
+  }
+  if (hand != nullptr) ReportHand(*hand, scan, json);
 }
 
 }  // namespace mjc::cli

@@ -150,7 +150,8 @@ void AddSim(CLI::App& app) {
   node_option = AddNodeOption(
       cmd, &node,
       "Node id of a new board (commissioned into its flash); a board's flash keeps its "
-      "own");
+      "own",
+      false);
   cmd->add_option("--robot", robot, "Plant parameter set of the robot (name or .json)")
       ->capture_default_str();
   cmd->add_option("--robot-description", robot_description,

@@ -106,9 +106,14 @@ void AddTrial(CLI::App& app) {
                   "start is an edge; none: no trigger")
       ->check(LineSpecCheck(true))
       ->capture_default_str();
-  cmd->add_option("--robot", robot_path,
-                  "Robot description of the joint (robots/*.json): its torque and travel "
-                  "limits go to the board before anything moves");
+  JointSuppliesRobot(
+      cmd,
+      cmd->add_option("--robot", robot_path,
+                      "Robot description of the joint (robots/*.json): its torque and "
+                      "travel limits go to the board before anything moves (with "
+                      "--joint: the joint's, from the hand file; another file is "
+                      "refused)"),
+      &robot_path);
   cmd->callback([] {
     // The joint's description first: a bad file moves nothing and writes nothing.
     std::optional<host::RobotDescription> robot;

@@ -101,6 +101,17 @@ std::optional<ToolConfig> ParseToolConfig(std::string_view text, std::string_vie
       config.reset_lines[node[0] - '0'] = *spec;
     }
   }
+  if (j.contains("hand")) {
+    const auto& h = j["hand"];
+    if (!h.is_string() || h.get<std::string>().empty()) {
+      *why = where + ": 'hand' must be the path of a hand file (hands/*.json), not " +
+             h.dump();
+      return std::nullopt;
+    }
+    config.hand = (std::filesystem::path(where).parent_path() / h.get<std::string>())
+                      .lexically_normal()
+                      .string();
+  }
   return config;
 }
 

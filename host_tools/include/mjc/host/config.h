@@ -20,17 +20,22 @@ struct ToolConfig {
   std::optional<bool> estop_active_low;       // its active level ("estop_active")
   std::optional<gpio::LineSpec> sync_line;    // the trigger to other instruments
   std::map<int, gpio::LineSpec> reset_lines;  // each board's NRST, by node id
+  // The hand file --joint looks in when no --hand is given ("hand"), its path taken
+  // from the config file's folder (hands/README.md).
+  std::optional<std::string> hand;
   std::string source;  // where it came from, for messages ("" = nowhere)
 };
 
 // The keys of the config file; more will come (lines of a hand, the lab's robots).
 inline constexpr std::string_view kConfigKeys[] = {
-    "iface", "node", "estop_line", "estop_active", "sync_line", "reset_lines"};
+    "iface", "node", "estop_line", "estop_active", "sync_line", "reset_lines", "hand"};
 
 // The config file's text: a JSON object with optional "iface" (an interface name, 1 to
 // 15 characters of [A-Za-z0-9_.-], as Linux allows), "node" (an integer 1..8),
 // "estop_line" and "sync_line" (CHIP:LINE, gpio::ParseLineSpec), "estop_active"
-// ("high" or "low") and "reset_lines" (an object from node ids "1".."8" to CHIP:LINE).
+// ("high" or "low"), "reset_lines" (an object from node ids "1".."8" to CHIP:LINE) and
+// "hand" (a non-empty path of a hand file, relative to `source`'s folder: ToolConfig's
+// hand holds it joined to that folder; the file is read when a command uses it).
 // nullopt with *why naming `source` and the key when it is not JSON, holds an unknown
 // key (named with the nearest known one) or a value out of range.
 std::optional<ToolConfig> ParseToolConfig(std::string_view text, std::string_view source,
