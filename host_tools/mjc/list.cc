@@ -10,6 +10,7 @@
 // a joint missing exits 3 (hands/README.md).
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <utility>
 
@@ -192,6 +193,12 @@ void ListBoards(const std::string& iface, int silence_ms, bool json,
   auto link = OpenLink(iface);
   const std::atomic<bool>& stop = StopOnSignals();
   host::BusScan scan;
+  if (hand != nullptr) {
+    // Every joint's board gets its chance to speak before it is called missing.
+    std::set<int> nodes;
+    for (const host::HandJoint& j : hand->joints) nodes.insert(j.node);
+    scan.Expect(std::move(nodes));
+  }
   std::string why;
   const host::ScanEnd end =
       host::ScanBus(*link, &scan, std::chrono::milliseconds(silence_ms), &stop, &why);

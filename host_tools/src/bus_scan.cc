@@ -68,6 +68,14 @@ bool BusScan::Complete() const {
   for (const auto& [node, n] : nodes_) {
     if (!n.shown || !n.judged) return false;
   }
+  constexpr auto kGiven =
+      static_cast<std::uint32_t>(BusScan::kExpectedWithin.count() * kBoardTickHz / 1000);
+  for (const int node : expected_) {
+    if (nodes_.count(node) != 0) continue;
+    for (const auto& [heard, n] : nodes_) {
+      if (n.identity.elapsed_ticks() < kGiven) return false;
+    }
+  }
   return true;
 }
 

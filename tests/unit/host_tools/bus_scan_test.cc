@@ -56,6 +56,36 @@ TEST(BusScan, CompleteOnceEveryNodeHeardRanABoardInfoPeriodOfItsOwnTime) {
   EXPECT_EQ(scan.nodes().count(3), 0u);
 }
 
+TEST(BusScan, AnExpectedNodeGetsASecondOfTheOthersTimeToSpeak) {
+  // A hand of nodes 1 and 2; node 1 shows itself at once, node 2 is slow to speak (a
+  // starved process on a loaded machine) or absent. The scan waits for it a second of
+  // node 1's own time, however long that takes on the wall.
+  BusScan scan;
+  scan.Expect({1, 2});
+  const std::uint32_t second = protocol::kBoardTickHz;
+  scan.Handle(Info(1, 0x3f2a));
+  std::uint32_t t = 0;
+  for (; t < second / 2; t += second / 10) scan.Handle(Beat(1, 40000 + t));
+  ASSERT_TRUE(scan.nodes().at(1).shown);
+  EXPECT_FALSE(scan.Complete());  // without Expect, this is where the scan ended
+  scan.Handle(Info(2, 0x9b01));   // node 2 speaks at last
+  for (std::uint32_t u = 0; u <= second / 5; u += second / 10) {
+    scan.Handle(Beat(2, 7000 + u));
+  }
+  EXPECT_TRUE(scan.Complete());
+
+  BusScan absent;
+  absent.Expect({1, 2});
+  absent.Handle(Info(1, 0x3f2a));
+  for (t = 0; t < second; t += second / 10) {
+    absent.Handle(Beat(1, 40000 + t));
+    EXPECT_FALSE(absent.Complete()) << t;
+  }
+  absent.Handle(Beat(1, 40000 + second));
+  EXPECT_TRUE(absent.Complete());  // a second of node 1's time: node 2 is missing
+  EXPECT_EQ(absent.nodes().count(2), 0u);
+}
+
 TEST(BusScan, TwoBoardsWithOneIdAreReported) {
   // Each sends its BoardInfo every period (1000 ticks): the second's first is a sign,
   // both heard twice the proof.

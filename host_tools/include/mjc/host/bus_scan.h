@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 
 #include "mjc/host/board_client.h"
@@ -49,14 +50,25 @@ struct ScannedNode {
 
 class BusScan {
  public:
+  // Nodes the caller expects (a hand's joints). Without it the scan may end once the
+  // boards heard first have shown themselves, before a slower one spoke; with it, it
+  // goes on until each expected node is heard, or until every node heard has talked for
+  // kExpectedWithin of its own time (at 10 heartbeats a second, ten chances for an
+  // expected board to speak: one that has not is missing). Board time, so a slow or
+  // starved machine does not declare a board missing.
+  void Expect(std::set<int> nodes) { expected_ = std::move(nodes); }
+  static constexpr std::chrono::milliseconds kExpectedWithin{1000};
+
   // Takes one frame off the bus; a host's frames and other ids are ignored.
   void Handle(const protocol::CanFrame& frame);
-  // True once a node was heard and every node heard has shown itself.
+  // True once a node was heard, every node heard has shown itself, and every expected
+  // node was heard or given its time (Expect).
   bool Complete() const;
   const std::map<int, ScannedNode>& nodes() const { return nodes_; }
 
  private:
   std::map<int, ScannedNode> nodes_;
+  std::set<int> expected_;
 };
 
 enum class ScanEnd : std::uint8_t {
