@@ -165,9 +165,26 @@ std::optional<protocol::CalibrationRecord> CalibrationFromJson(
   return checked;
 }
 
-UploadOutcome UploadCalibration(const std::string& iface, int node,
-                                const protocol::CalibrationRecord& record, int timeout_ms,
-                                std::string* why) {
+namespace {
+
+// Sends again while the board answers that the transfer itself failed.
+template <class Once>
+UploadOutcome WithRetries(const Once& once) {
+  UploadOutcome out;
+  for (int transfer = 1;; ++transfer) {
+    out = once();
+    out.transfers = transfer;
+    if (out.status != UploadStatus::kAnswered ||
+        out.result != protocol::CalibrationResult::kReassemblyError ||
+        transfer > kMostReassemblyRetries) {
+      return out;
+    }
+  }
+}
+
+UploadOutcome UploadOnce(const std::string& iface, int node,
+                         const protocol::CalibrationRecord& record, int timeout_ms,
+                         std::string* why) {
   using protocol::Function;
   const auto n = static_cast<std::uint8_t>(node);
   UploadOutcome out;
@@ -218,9 +235,9 @@ UploadOutcome UploadCalibration(const std::string& iface, int node,
   return out;
 }
 
-UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
-                                const protocol::CalibrationRecord& record, int timeout_ms,
-                                std::string* why) {
+UploadOutcome UploadOnce(BoardClient& board, CanLink& isotp,
+                         const protocol::CalibrationRecord& record, int timeout_ms,
+                         std::string* why) {
   using protocol::CanFrame;
   using protocol::Function;
   const std::uint8_t n = board.node();
@@ -311,6 +328,20 @@ UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
   out.result = static_cast<protocol::CalibrationResult>(got->data[1]);
   out.detail = got->data[2];
   return out;
+}
+
+}  // namespace
+
+UploadOutcome UploadCalibration(const std::string& iface, int node,
+                                const protocol::CalibrationRecord& record, int timeout_ms,
+                                std::string* why) {
+  return WithRetries([&] { return UploadOnce(iface, node, record, timeout_ms, why); });
+}
+
+UploadOutcome UploadCalibration(BoardClient& board, CanLink& isotp,
+                                const protocol::CalibrationRecord& record, int timeout_ms,
+                                std::string* why) {
+  return WithRetries([&] { return UploadOnce(board, isotp, record, timeout_ms, why); });
 }
 
 SweepSamples RecordSweep(BoardClient& board, double length_s,

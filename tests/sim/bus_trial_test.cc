@@ -155,4 +155,56 @@ TEST(BusBoard, CalibrationUploadIsAnsweredAndHeld) {
   EXPECT_TRUE(bus.app().calibrated());  // the board's side agrees
 }
 
+// Drops the ISO-TP consecutive frame of sequence number 3 of the first `transfers`
+// transfers it carries: the board's reassembly fails (out of sequence).
+class BreakingLink final : public host::CanLink {
+ public:
+  BreakingLink(host::CanLink* link, int transfers) : link_(link), left_(transfers) {}
+
+ private:
+  bool DoSend(const protocol::CanFrame& f, std::string* why) override {
+    if ((f.data[0] >> 4) == 1) broken_ = false;  // a first frame: a new transfer
+    if (!broken_ && left_ > 0 && f.data[0] == 0x23) {
+      broken_ = true;
+      --left_;
+      return true;  // lost
+    }
+    return link_->Send(f, why);
+  }
+  host::ReceiveResult DoReceive(int timeout_ms, std::string* why) override {
+    return link_->Receive(timeout_ms, why);
+  }
+  bool DoSetFilters(std::span<const host::IdFilter> filters, std::string* why) override {
+    return link_->SetFilters(filters, why);
+  }
+  host::CanLink* link_;
+  int left_;
+  bool broken_ = false;
+};
+
+TEST(BusBoard, ACalibrationTransferTheBoardLostIsSentAgain) {
+  sim::BusBoard bus(plant::LoadPlantParams("default"), app::DefaultJointConfig());
+  host::BoardClient& client = bus.client();
+  const auto isotp = bus.Connect();
+  CalibrationRecord good;
+  good.backlash.c_right = Angle::Quantize(0.019);
+  good.backlash.c_left = Angle::Quantize(-0.016);
+  std::string why;
+  // Two transfers broken: the board says so each time, the third is accepted.
+  BreakingLink twice(isotp.get(), 2);
+  const host::UploadOutcome sent =
+      host::UploadCalibration(client, twice, good, 1000, &why);
+  ASSERT_EQ(sent.status, host::UploadStatus::kAnswered) << why;
+  EXPECT_EQ(sent.result, CalibrationResult::kAccepted);
+  EXPECT_EQ(sent.transfers, 3);
+  EXPECT_TRUE(bus.app().calibrated());
+  // Every transfer broken: the board's answer after the last retry.
+  BreakingLink always(isotp.get(), 100);
+  const host::UploadOutcome lost =
+      host::UploadCalibration(client, always, good, 1000, &why);
+  ASSERT_EQ(lost.status, host::UploadStatus::kAnswered) << why;
+  EXPECT_EQ(lost.result, CalibrationResult::kReassemblyError);
+  EXPECT_EQ(lost.transfers, host::kMostReassemblyRetries + 1);
+}
+
 }  // namespace

@@ -61,8 +61,16 @@ struct UploadOutcome {
   UploadStatus status = UploadStatus::kNoAnswer;
   protocol::CalibrationResult result = protocol::CalibrationResult::kAccepted;
   std::uint8_t detail = 0;
-  double elapsed_ms = 0;
+  double elapsed_ms = 0;  // the last transfer's
+  int transfers = 0;      // transfers made (more than one: see kMostReassemblyRetries)
 };
+
+// A board that answers kReassemblyError lost the transfer itself (a consecutive frame
+// late beyond its ISO-TP timeout, out of sequence) and applied nothing: the uploads below
+// send the record again, up to this many times, before they return that answer. A
+// sender starved of CPU on a loaded host is the usual cause; a bus that keeps breaking
+// transfers still ends in the answer.
+inline constexpr int kMostReassemblyRetries = 3;
 
 // Uploads `record` to `node` on `iface` (ISO-TP on the node's 0x3E/0x3F ids) and waits
 // for the board's answer as long as Patience{timeout_ms} allows: timeout_ms of the
