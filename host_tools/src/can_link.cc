@@ -357,6 +357,23 @@ std::unique_ptr<IsoTpLink> IsoTpLink::Open(const std::string& interface,
   unsigned index = 0;
   const int fd = OpenSocket(SOCK_DGRAM, CAN_ISOTP, interface, why, &index);
   if (fd < 0) return nullptr;
+  // Each Send returns its own transfer's outcome. Otherwise the kernel reports a
+  // transfer that failed (no flow control within its fixed 1 s: ECOMM) on the next call
+  // on the socket, whichever that is, and the next transfer is then never tried.
+  // CAN_ISOTP_WAIT_TX_DONE makes the write wait for the transfer's last frame, and a
+  // blocking socket lets it (Receive polls before it reads). The kernel takes ISO-TP
+  // options only before the bind.
+  can_isotp_options options{};
+  socklen_t size = sizeof options;
+  if (::getsockopt(fd, SOL_CAN_ISOTP, CAN_ISOTP_OPTS, &options, &size) < 0) {
+    return CloseFailed(fd, "cannot read the ISO-TP options on '" + interface + "'", why);
+  }
+  options.flags |= CAN_ISOTP_WAIT_TX_DONE;
+  const int flags = ::fcntl(fd, F_GETFL);
+  if (::setsockopt(fd, SOL_CAN_ISOTP, CAN_ISOTP_OPTS, &options, sizeof options) < 0 ||
+      flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) < 0) {
+    return CloseFailed(fd, "cannot set up ISO-TP on '" + interface + "'", why);
+  }
   sockaddr_can address{};
   address.can_family = AF_CAN;
   address.can_ifindex = static_cast<int>(index);
@@ -384,7 +401,10 @@ bool IsoTpLink::Send(std::span<const std::uint8_t> payload, std::string* why) {
       WaitFor(fd_, POLLOUT, 10, &error);
       continue;
     }
-    Say(why, Errno("ISO-TP send on '" + interface_ + "'"));
+    // ECOMM: this transfer's first frame got no flow control within the kernel's 1 s.
+    Say(why, errno == ECOMM ? "no ISO-TP flow control from the peer on '" + interface_ +
+                                  "' within the kernel's 1 s"
+                            : Errno("ISO-TP send on '" + interface_ + "'"));
     return false;
   }
   Say(why, "ISO-TP send on '" + interface_ + "': the previous transfer did not finish");

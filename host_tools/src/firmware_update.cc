@@ -538,7 +538,7 @@ FirmwareUpdate::Step FirmwareUpdate::Upload(UpdateResult* r) {
   const std::uint32_t length = image_.header.length;
   const auto image = image_.image();
   std::vector<std::uint8_t> request;
-  int failures = 0;
+  int failures = 0, transfer_failures = 0;
   while (next_offset_ < length) {
     const std::uint32_t offset = next_offset_;
     const auto n = static_cast<std::uint32_t>(
@@ -559,12 +559,20 @@ FirmwareUpdate::Step FirmwareUpdate::Upload(UpdateResult* r) {
     if (answer && error == BootError::kNone && plausible) {
       next_offset_ = answer->next_offset;
       failures = 0;
+      transfer_failures = 0;
       Report(UpdateProgress::Phase::kUploading, next_offset_);
       continue;
     }
     if (error == BootError::kUnexpectedOffset && plausible) {
       next_offset_ = answer->next_offset;  // the board says where it is: resume there
       if (++failures <= kMostFailures) continue;
+    } else if (!sent && !answer) {  // the kernel's bound, the board alive (w above)
+      ++r->chunks_resent;
+      if (++transfer_failures <= kMostTransferFailures) continue;
+      return FailWith(r, Who() + " did not take the chunk at offset " +
+                             std::to_string(offset) + " in " +
+                             std::to_string(kMostTransferFailures + 1) +
+                             " transfers though it kept running (" + why + ")");
     } else if (error == BootError::kTransfer || (answer && !plausible)) {
       ++r->chunks_resent;
       if (++failures <= kMostFailures) continue;

@@ -358,6 +358,49 @@ TEST(FirmwareUpdate, LostFramesAndAnswersAreSentAgainFromWhereTheBoardIs) {
   EXPECT_TRUE(region == image.file);
 }
 
+TEST(FirmwareUpdate, TransfersTheHostGaveUpOnWhileTheBoardRanAreSentAgain) {
+  // A host too busy for the kernel's fixed 1 s wait for flow control (a loaded machine;
+  // a board process starved of CPU answers late): eight chunks in a row whose first
+  // frame never gets an answer in time, though the board keeps its clock. More than the
+  // five failures in a row a board that refuses gets; within the transfers' own budget.
+  FlashRig rig;
+  Commission(rig);
+  rig.PowerOn();
+  rig.RunMs(500);
+  const auto image = Checked(PackedImage(kNewBuild, 16 * 1024, 12));
+  int first_frames = 0, dropped = 0;
+  rig.drop_to_board = [&](const protocol::CanFrame& f) {
+    if ((f.data[0] >> 4) != 1) return false;
+    ++first_frames;
+    if (first_frames >= 10 && dropped < 8) {
+      ++dropped;
+      return true;
+    }
+    return false;
+  };
+  const host::UpdateResult r = rig.Update(kNode, image);
+  EXPECT_EQ(dropped, 8);
+  EXPECT_EQ(r.end, UpdateEnd::kUpdated) << r.message;
+  EXPECT_EQ(r.chunks_resent, 8);
+  ExpectRunning(rig, kNewBuild);
+
+  // A board that takes no first frame at all is still given up on, saying why.
+  FlashRig deaf;
+  Commission(deaf);
+  deaf.PowerOn();
+  deaf.RunMs(500);
+  first_frames = 0;
+  deaf.drop_to_board = [&](const protocol::CanFrame& f) {
+    return (f.data[0] >> 4) == 1 && ++first_frames > 1;  // the Begin, then nothing
+  };
+  const host::UpdateResult none = deaf.Update(kNode, image);
+  EXPECT_EQ(none.end, UpdateEnd::kFailed);
+  EXPECT_NE(none.message.find("did not take the chunk at offset 0 in 31 transfers though "
+                              "it kept running (no flow control)"),
+            std::string::npos)
+      << none.message;
+}
+
 TEST(FirmwareUpdate, AnImageForOtherHardwareIsRefusedAndTheOldOneRunsAgain) {
   FlashRig rig;
   Commission(rig);

@@ -162,6 +162,11 @@ class FirmwareUpdate {
   // request; and updates begun again before it gives up on the board.
   static constexpr int kMostFailures = 5;
   static constexpr int kMostRestarts = 3;
+  // Chunks whose transfer this host's kernel gave up on (no ISO-TP flow control within
+  // its fixed 1 s of wall time) while the board kept its clock, in a row: a host too
+  // busy for the kernel's bound (a board starved of CPU answers late), not a board that
+  // refuses, so they have a budget of their own.
+  static constexpr int kMostTransferFailures = 30;
 
   FirmwareUpdate(CanLink* link, BootTransport* transport, std::uint8_t node,
                  const FirmwareImage& image, UpdateOptions options = {});
