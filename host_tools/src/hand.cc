@@ -4,13 +4,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
-#include <sstream>
 #include <stdexcept>
 
+#include "mjc/host/report.h"
 #include "mjc/protocol/can_frame.h"
 #include "mjc/strict_json.h"
 
@@ -188,19 +187,12 @@ std::optional<Hand> ParseHand(std::string_view json_text, std::string_view sourc
 }
 
 std::optional<Hand> LoadHand(const std::string& path, std::string* why) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+  const std::optional<std::string> text = ReadFileText(path);
+  if (!text) {
     *why = path + ": cannot open the hand file";
     return std::nullopt;
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) {
-    *why = path + ": read error";
-    return std::nullopt;
-  }
-  return ParseHand(text.str(), path, std::filesystem::path(path).parent_path().string(),
-                   why);
+  return ParseHand(*text, path, std::filesystem::path(path).parent_path().string(), why);
 }
 
 bool HandCheck::Complete() const {
